@@ -1,0 +1,70 @@
+"""Iteration caps and tolerances of every iterative kernel, with their units.
+
+Tolerances are relative to a length scale of the pair, ``scale`` (metres): the sum of
+the two shapes' bounding radii.  Multiplying by the scale keeps a millimetre object and
+a kilometre object equally well resolved.
+"""
+
+# --- shape codes, in the canonical pair order (a pair kernel has code_a <= code_b) ----
+SPHERE = 0
+ELLIPSOID = 1
+BOX = 2
+CAPSULE = 3
+CYLINDER = 4
+CONE = 5
+CONVEX = 6
+PLANE = 7
+N_SHAPE_TYPES = 8
+SHAPE_NAMES = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex", "plane")
+
+# --- layout of one row of the shape parameter table (float64[N_PARAMS]) ----------------
+N_PARAMS = 8
+P_MARGIN = 6     # padding radius added around the shape (m)
+P_RADIUS = 7     # bounding radius about the body origin, margin included (m)
+
+# --- result status codes (see mkcollision_ros.results.Status) --------------------------
+ST_SEPARATED = 0
+ST_TOUCHING = 1
+ST_PENETRATING = 2
+ST_FAILED = 3
+ST_NOT_RUN = 4
+
+# --- method codes -----------------------------------------------------------------------
+M_AUTO = 0
+M_GJK_EPA = 1
+M_MPR = 2
+M_ANALYTIC = 3
+M_ELLIPSOID_EXACT = 4
+M_ELLIPSOID_SAMPLED = 5
+METHOD_NAMES = ("auto", "gjk_epa", "mpr", "analytic", "ellipsoid_exact", "ellipsoid_sampled")
+
+# --- the touching rule -------------------------------------------------------------------
+# A pair is in contact iff signed distance <= TOUCH_TOL * scale.  |distance| within the
+# tolerance is reported as TOUCHING, below it PENETRATING, above it SEPARATED.
+TOUCH_TOL = 1e-9
+
+# --- GJK ---------------------------------------------------------------------------------
+GJK_MAX_ITERS = 128        # iterations (support evaluations)
+GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimensionless)
+
+# --- EPA ---------------------------------------------------------------------------------
+EPA_MAX_ITERS = 255        # added vertices
+EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
+EPA_REL_TOL = 1e-10        # stop when support gain < tol * scale (dimensionless)
+
+# --- MPR ---------------------------------------------------------------------------------
+MPR_MAX_ITERS = 128        # portal refinements
+MPR_REL_TOL = 1e-10        # portal-to-boundary gap, relative to scale
+
+# --- exact ellipsoid distance ------------------------------------------------------------
+ELL_MAX_ITERS = 200        # bisection steps on the Lagrange multiplier (float64 exhausts ~1100)
+
+# --- layout of one pair result row (float64[OUT_SIZE]), every vector in A's frame or,
+# after the batch kernel transforms it, in the world frame -------------------------------
+OUT_DIST = 0       # signed distance (m): > 0 apart, < 0 penetrating (depth = -distance)
+OUT_NORMAL = 1     # 1:4 unit normal from A to B; moving B by depth along it separates
+OUT_PA = 4         # 4:7 witness point on A's surface
+OUT_PB = 7         # 7:10 witness point on B's surface
+OUT_ITERS = 10     # iterations used by the method
+OUT_METHOD = 11    # method code (M_*)
+OUT_SIZE = 12

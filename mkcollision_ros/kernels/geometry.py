@@ -1,0 +1,194 @@
+"""Poses and support mappings of every shape.
+
+Frames: a shape's parameters are in its own body frame (``_a``/``_b``); ``x_ab`` is the
+pose of B expressed in A's frame, given as a rotation matrix ``r_ab`` (3, 3) and a
+translation ``t_ab`` (3,), both float64, metres.  Quaternions are ``quat_xyzw``.
+
+Each shape is split into a *core* and an *inflation radius*: a sphere is a point grown by
+its radius, a capsule a segment grown by its radius, every other shape is its own core
+grown by its margin only.  GJK runs on the cores and subtracts the radii, which is exact
+and converges in a few iterations for spheres and capsules.
+
+Shape parameter row (float64[8], see constants.N_PARAMS):
+  sphere    [r]                     ellipsoid [a, b, c] (semi-axes)
+  box       [hx, hy, hz] (half)     capsule   [r, half_length]       (segment along z)
+  cylinder  [r, half_height]        cone      [r, half_height]       (tip at +z, centred)
+  convex    []  (vertices in ``verts[v0:v0+vn]``, body frame)
+  plane     [nx, ny, nz, d] (unit n; half-space n.x <= d)
+  [6] margin, [7] bounding radius about the origin with margin (plane: 0, unbounded).
+"""
+import math
+
+import numpy as np
+
+from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_MARGIN,
+                        PLANE, SPHERE)
+from .jit import njit_kernel
+
+
+@njit_kernel
+def quat_to_matrix(q):
+    """Rotation matrix (3, 3) of a unit quaternion ``q`` = (x, y, z, w), float64."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    r = np.empty((3, 3))
+    r[0, 0] = 1.0 - 2.0 * (y * y + z * z)
+    r[0, 1] = 2.0 * (x * y - z * w)
+    r[0, 2] = 2.0 * (x * z + y * w)
+    r[1, 0] = 2.0 * (x * y + z * w)
+    r[1, 1] = 1.0 - 2.0 * (x * x + z * z)
+    r[1, 2] = 2.0 * (y * z - x * w)
+    r[2, 0] = 2.0 * (x * z - y * w)
+    r[2, 1] = 2.0 * (y * z + x * w)
+    r[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    return r
+
+
+@njit_kernel
+def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
+    """Pose of B in A's frame from two world poses: returns (r_ab (3, 3), t_ab (3,))."""
+    r_ab = r_a_w.T @ r_b_w
+    t_ab = r_a_w.T @ (pos_b_w - pos_a_w)
+    return r_ab, t_ab
+
+
+@njit_kernel
+def inflation(code, prm):
+    """Radius (m) by which the core of the shape is grown: its margin, plus the radius
+    for spheres and capsules."""
+    if code == SPHERE or code == CAPSULE:
+        return prm[0] + prm[P_MARGIN]
+    return prm[P_MARGIN]
+
+
+@njit_kernel
+def support_core(code, prm, verts, v0, vn, d, out):
+    """Write into ``out`` (3,) the point of the shape's core farthest along the
+    direction ``d`` (3,), both in the body frame.  ``d`` need not be unit."""
+    dx, dy, dz = d[0], d[1], d[2]
+    if code == SPHERE:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+    elif code == ELLIPSOID:
+        a, b, c = prm[0], prm[1], prm[2]
+        ex, ey, ez = a * a * dx, b * b * dy, c * c * dz
+        n = math.sqrt(ex * dx + ey * dy + ez * dz)
+        if n > 0.0:
+            out[0] = ex / n
+            out[1] = ey / n
+            out[2] = ez / n
+        else:
+            out[0] = a
+            out[1] = 0.0
+            out[2] = 0.0
+    elif code == BOX:
+        out[0] = prm[0] if dx >= 0.0 else -prm[0]
+        out[1] = prm[1] if dy >= 0.0 else -prm[1]
+        out[2] = prm[2] if dz >= 0.0 else -prm[2]
+    elif code == CAPSULE:
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = prm[1] if dz >= 0.0 else -prm[1]
+    elif code == CYLINDER:
+        r, h = prm[0], prm[1]
+        s = math.sqrt(dx * dx + dy * dy)
+        if s > 0.0:
+            out[0] = r * dx / s
+            out[1] = r * dy / s
+        else:
+            out[0] = r
+            out[1] = 0.0
+        out[2] = h if dz >= 0.0 else -h
+    elif code == CONE:
+        r, h = prm[0], prm[1]
+        s = math.sqrt(dx * dx + dy * dy)
+        if s > 0.0:
+            bx, by = r * dx / s, r * dy / s
+        else:
+            bx, by = r, 0.0
+        # tip (0, 0, h) against the best rim point (bx, by, -h)
+        if dz * h >= dx * bx + dy * by - dz * h:
+            out[0] = 0.0
+            out[1] = 0.0
+            out[2] = h
+        else:
+            out[0] = bx
+            out[1] = by
+            out[2] = -h
+    elif code == CONVEX:
+        best = -np.inf
+        k = v0
+        for i in range(v0, v0 + vn):
+            v = verts[i, 0] * dx + verts[i, 1] * dy + verts[i, 2] * dz
+            if v > best:
+                best = v
+                k = i
+        out[0] = verts[k, 0]
+        out[1] = verts[k, 1]
+        out[2] = verts[k, 2]
+    else:  # PLANE has no support point; callers route planes to the half-space path
+        out[0] = 0.0
+        out[1] = 0.0
+        out[2] = 0.0
+
+
+@njit_kernel
+def support_full(code, prm, verts, v0, vn, d, out):
+    """Support point (body frame) of the whole shape: core plus inflation along ``d``."""
+    support_core(code, prm, verts, v0, vn, d, out)
+    rad = inflation(code, prm)
+    if rad > 0.0:
+        n = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        if n > 0.0:
+            out[0] += rad * d[0] / n
+            out[1] += rad * d[1] / n
+            out[2] += rad * d[2] / n
+
+
+@njit_kernel
+def centre_core(code, prm, verts, v0, vn, out):
+    """A point strictly inside the core (body frame): the origin, or the vertex mean."""
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    if code == CONVEX and vn > 0:
+        for i in range(v0, v0 + vn):
+            out[0] += verts[i, 0]
+            out[1] += verts[i, 1]
+            out[2] += verts[i, 2]
+        out[0] /= vn
+        out[1] /= vn
+        out[2] /= vn
+
+
+@njit_kernel
+def shape_scale(sa, sb):
+    """Length scale (m) of a pair: the sum of the bounding radii (planes count 0)."""
+    s = sa[1][7] + sb[1][7]
+    return s if s > 0.0 else 1.0
+
+
+@njit_kernel
+def minkowski_support(sa, sb, verts, r_ab, t_ab, d, core, wa, wb, w):
+    """Support point of the Minkowski difference A - B along ``d`` (3,), in A's frame.
+
+    ``sa``/``sb`` are shape tuples ``(code int64, prm float64[8], v0 int64, vn int64)``;
+    ``core`` selects the cores (True) or the whole inflated shapes (False).
+    Writes the support point of A into ``wa``, that of B (in A's frame) into ``wb`` and
+    their difference into ``w``, each float64 (3,).
+    """
+    db = np.empty(3)
+    # direction -d seen from B's frame: r_ab^T (-d)
+    for i in range(3):
+        db[i] = -(r_ab[0, i] * d[0] + r_ab[1, i] * d[1] + r_ab[2, i] * d[2])
+    sb_local = np.empty(3)
+    if core:
+        support_core(sa[0], sa[1], verts, sa[2], sa[3], d, wa)
+        support_core(sb[0], sb[1], verts, sb[2], sb[3], db, sb_local)
+    else:
+        support_full(sa[0], sa[1], verts, sa[2], sa[3], d, wa)
+        support_full(sb[0], sb[1], verts, sb[2], sb[3], db, sb_local)
+    for i in range(3):
+        wb[i] = (r_ab[i, 0] * sb_local[0] + r_ab[i, 1] * sb_local[1]
+                 + r_ab[i, 2] * sb_local[2] + t_ab[i])
+        w[i] = wa[i] - wb[i]

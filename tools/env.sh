@@ -10,3 +10,5 @@ case $- in *u*) _MK_U=1; set +u;; *) _MK_U=;; esac
 . "$_MK_ROOT/install/local_setup.bash"
 [ -n "$_MK_U" ] && set -u
 unset _MK_U
+# Keep DDS discovery on this machine unless the user asks for more.
+export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"

@@ -1,0 +1,41 @@
+"""Stateless collision queries over a subset of bodies (the CheckCollision service):
+every pair among the given bodies, one deepest point per touching pair, no arbiters."""
+import numpy as np
+
+from .kernels import constants as C
+from .kernels.narrowphase import collide_batch
+from .results import ContactSet
+from .shapes import ShapeTable
+
+
+def query_contacts(table: ShapeTable, names, indices, positions, orientations, static,
+                   method=C.M_AUTO):
+    """Contacts among bodies ``indices`` (int64 (K,)) at the given world poses.
+
+    ``positions`` (N, 3) / ``orientations`` (N, 4) unit quat_xyzw hold every body's pose
+    (only rows in ``indices`` are read); static-static pairs are skipped.
+    """
+    idx = np.asarray(indices, dtype=np.int64)
+    ii, jj = np.triu_indices(len(idx), k=1)
+    pairs = np.stack([idx[ii], idx[jj]], axis=1).reshape(-1, 2)
+    pairs = np.sort(pairs, axis=1)
+    static = np.asarray(static, dtype=bool)
+    pairs = np.ascontiguousarray(pairs[~(static[pairs[:, 0]] & static[pairs[:, 1]])])
+    out = np.zeros((len(pairs), C.OUT_SIZE))
+    status = np.zeros(len(pairs), dtype=np.int64)
+    if len(pairs):
+        collide_batch(table.codes, table.params, table.vrange, table.verts, pairs,
+                      np.ascontiguousarray(positions, dtype=np.float64),
+                      np.ascontiguousarray(orientations, dtype=np.float64),
+                      method, out, status)
+    hit = (status == C.ST_TOUCHING) | (status == C.ST_PENETRATING)
+    rows, pairs = out[hit], pairs[hit]
+    pa, pb = rows[:, C.OUT_PA:C.OUT_PA + 3], rows[:, C.OUT_PB:C.OUT_PB + 3]
+    n = len(rows)
+    return ContactSet(
+        names=list(names), body_a=pairs[:, 0], body_b=pairs[:, 1],
+        position=0.5 * (pa + pb), point_a=pa, point_b=pb,
+        normal=rows[:, C.OUT_NORMAL:C.OUT_NORMAL + 3],
+        depth=np.maximum(0.0, -rows[:, C.OUT_DIST]),
+        contact_id=np.zeros(n, np.int64), age=np.zeros(n, np.int64),
+        method=rows[:, C.OUT_METHOD].astype(np.int64), status=status[hit])

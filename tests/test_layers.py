@@ -1,0 +1,47 @@
+"""The layering rules of STYLE.md, enforced: kernels import only numpy, numba and the
+standard library; the core library imports no rclpy, rerun or test peers."""
+import ast
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+KERNEL_OK = {"numpy", "numba", "math", "__future__"}
+FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
+                  "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
+ROS_MODULES = {"node.py", "demo.py"}
+
+
+def imports(path):
+    tree = ast.parse(path.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name.split(".")[0], node.lineno
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            yield node.module.split(".")[0], node.lineno
+
+
+def test_kernels_import_only_numpy_numba_math():
+    for path in sorted((ROOT / "mkcollision_ros" / "kernels").glob("*.py")):
+        for module, line in imports(path):
+            assert module in KERNEL_OK, f"{path.name}:{line} imports {module}"
+
+
+def test_core_library_is_free_of_ros_and_peers():
+    for path in sorted((ROOT / "mkcollision_ros").glob("*.py")):
+        if path.name in ROS_MODULES:
+            continue
+        for module, line in imports(path):
+            assert module not in FORBIDDEN_CORE, f"{path.name}:{line} imports {module}"
+
+
+def test_import_without_ros_on_the_path():
+    code = ("import sys; sys.modules['rclpy'] = None; sys.modules['rerun'] = None\n"
+            "import mkcollision_ros, mkcollision_ros.pipeline\n"
+            "r = mkcollision_ros.collide({'type': 'sphere', 'radius': 1.0}, ([0, 0, 0], [0, 0, 0, 1]),"
+            " {'type': 'sphere', 'radius': 1.0}, ([1.5, 0, 0], [0, 0, 0, 1]))\n"
+            "assert abs(r.depth - 0.5) < 1e-12, r\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=ROOT, timeout=600)
+    assert out.returncode == 0, out.stderr

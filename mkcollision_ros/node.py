@@ -49,7 +49,7 @@ PARAMETERS = (
     ("proximity", 0.0, "m; bounding boxes are grown by this (>= 0)"),
     ("merge_distance", 0.02, "m; a new contact this close to a stored one updates it"),
     ("max_contacts", 4, "contacts kept per touching pair (>= 1)"),
-    ("stale_steps", 3, "steps an unconfirmed pair is kept (>= 0)"),
+    ("stale_steps", 3, "steps an unconfirmed pair is kept (>= 1)"),
     ("publish_markers", True, "publish the MarkerArray"),
     ("marker_normal_length", 0.2, "m; length of the normal arrows"),
     ("max_marker_arrows", 500, "cap on normal arrows per MarkerArray"),
@@ -84,7 +84,8 @@ class CollisionNode(Node):
                 self.poses.positions[i], self.poses.orientations[i] = body["pose"]
         self.static = np.array([b["static"] for b in self.bodies])
         self.table = build_table([b["shape"] for b in self.bodies])
-        self.pipeline = Pipeline(self.bodies, config=PipelineConfig(
+        self.pipeline = Pipeline([{k: v for k, v in b.items() if k != "pose"}
+                                  for b in self.bodies], config=PipelineConfig(
             method=self.cfg["method"], proximity=self.cfg["proximity"],
             merge_distance=self.cfg["merge_distance"], max_contacts=self.cfg["max_contacts"],
             stale_steps=self.cfg["stale_steps"]))
@@ -123,7 +124,7 @@ class CollisionNode(Node):
         checks = (
             ("rate_hz", cfg["rate_hz"] > 0.0), ("proximity", cfg["proximity"] >= 0.0),
             ("merge_distance", cfg["merge_distance"] >= 0.0),
-            ("max_contacts", cfg["max_contacts"] >= 1), ("stale_steps", cfg["stale_steps"] >= 0),
+            ("max_contacts", cfg["max_contacts"] >= 1), ("stale_steps", cfg["stale_steps"] >= 1),
             ("marker_normal_length", cfg["marker_normal_length"] >= 0.0),
             ("max_marker_arrows", cfg["max_marker_arrows"] >= 0),
             ("warn_throttle_s", cfg["warn_throttle_s"] >= 0.0),

@@ -45,9 +45,15 @@ def quat_to_matrix(q):
 
 @njit_kernel
 def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
-    """Pose of B in A's frame from two world poses: returns (r_ab (3, 3), t_ab (3,))."""
-    r_ab = r_a_w.T @ r_b_w
-    t_ab = r_a_w.T @ (pos_b_w - pos_a_w)
+    """Pose of B in A's frame from two world poses: returns (r_ab (3, 3), t_ab (3,)).
+    Written as loops: numba's ``@`` needs scipy's BLAS, which is not a dependency."""
+    r_ab = np.empty((3, 3))
+    t_ab = np.empty(3)
+    for i in range(3):
+        t_ab[i] = (r_a_w[0, i] * (pos_b_w[0] - pos_a_w[0]) + r_a_w[1, i] * (pos_b_w[1] - pos_a_w[1])
+                   + r_a_w[2, i] * (pos_b_w[2] - pos_a_w[2]))
+        for j in range(3):
+            r_ab[i, j] = r_a_w[0, i] * r_b_w[0, j] + r_a_w[1, i] * r_b_w[1, j] + r_a_w[2, i] * r_b_w[2, j]
     return r_ab, t_ab
 
 

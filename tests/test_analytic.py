@@ -1,0 +1,295 @@
+"""Closed-form pair kernels (kernels/analytic.py) against hand-derived values, coal (peer
+oracle, whose sphere/box/capsule/half-space pairs are themselves closed forms) and the
+sign-convention invariants.  Seeded; no timings."""
+
+import coal
+import numpy as np
+import pytest
+
+from mkcollision_ros.kernels import constants as C
+from mkcollision_ros.kernels.analytic import collide_analytic
+from mkcollision_ros.kernels.geometry import support_full
+from mkcollision_ros.shapes import shape_row
+
+VERTS0 = np.zeros((0, 3))
+
+
+def tup(shape, voff=0):
+    code, prm, v = shape_row(shape)
+    return (np.int64(code), prm, np.int64(voff), np.int64(len(v))), v
+
+
+def rot(rng):
+    q = rng.normal(size=4)
+    x, y, z, w = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def coal_shape(s):
+    t = s["type"]
+    if t == "sphere":
+        g = coal.Sphere(s["radius"])
+    elif t == "box":
+        g = coal.Box(*s["size"])
+    elif t == "capsule":
+        g = coal.Capsule(s["radius"], s["length"])
+    elif t == "ellipsoid":
+        g = coal.Ellipsoid(*s["radii"])
+    elif t == "cylinder":
+        g = coal.Cylinder(s["radius"], s["height"])
+    elif t == "cone":
+        g = coal.Cone(s["radius"], s["height"])
+    elif t == "plane":
+        g = coal.Halfspace(np.asarray(s["normal"], float), float(s["offset"]))
+    else:
+        raise ValueError(t)
+    if s.get("margin", 0.0):
+        g.setSweptSphereRadius(s["margin"])
+    return g
+
+
+def coal_dist(sa, sb, r, t):
+    tf = coal.Transform3s()
+    tf.setRotation(r)
+    tf.setTranslation(t)
+    req = coal.DistanceRequest()
+    req.gjk_tolerance = 1e-12
+    res = coal.DistanceResult()
+    return coal.distance(coal_shape(sa), coal.Transform3s(), coal_shape(sb), tf, req, res)
+
+
+def sdf(shape, p):
+    """Signed distance (m) of the body-frame point p to the shape (exact)."""
+    t = shape["type"]
+    m = shape.get("margin", 0.0)
+    if t == "sphere":
+        return np.linalg.norm(p) - shape["radius"] - m
+    if t == "box":
+        h = 0.5 * np.asarray(shape["size"])
+        q = np.abs(p) - h
+        return np.linalg.norm(np.maximum(q, 0.0)) + min(q.max(), 0.0) - m
+    if t == "capsule":
+        hl = 0.5 * shape["length"]
+        z = min(hl, max(-hl, p[2]))
+        return np.linalg.norm(p - np.array([0, 0, z])) - shape["radius"] - m
+    if t == "plane":
+        n = np.asarray(shape["normal"], float)
+        return n @ p - shape["offset"]
+    raise ValueError(t)
+
+
+def run(sa_d, sb_d, r, t):
+    sa, _ = tup(sa_d)
+    sb, _ = tup(sb_d)
+    out = np.full(C.OUT_SIZE, np.nan)
+    st = collide_analytic(sa, sb, VERTS0, r, t, out)
+    return st, out
+
+
+def rand_shape(rng, kind, margin_p=0.3):
+    if kind == "sphere":
+        s = {"type": "sphere", "radius": rng.uniform(0.1, 1.0)}
+    elif kind == "box":
+        s = {"type": "box", "size": list(rng.uniform(0.1, 2.0, 3))}
+    elif kind == "capsule":
+        s = {"type": "capsule", "radius": rng.uniform(0.1, 1.0),
+             "length": rng.uniform(0.0, 2.0)}
+    elif kind == "ellipsoid":
+        s = {"type": "ellipsoid", "radii": list(rng.uniform(0.1, 1.5, 3))}
+    elif kind == "cylinder":
+        s = {"type": "cylinder", "radius": rng.uniform(0.1, 1.0), "height": rng.uniform(0.1, 2)}
+    elif kind == "cone":
+        s = {"type": "cone", "radius": rng.uniform(0.1, 1.0), "height": rng.uniform(0.1, 2)}
+    else:
+        raise ValueError(kind)
+    if rng.random() < margin_p:
+        s["margin"] = rng.uniform(0.0, 0.3)
+    return s
+
+
+def contact_offset(sa, sb, r, u):
+    """h_A(u) + h_B(-u): beyond this offset along the unit u the pair is apart."""
+    pa = np.empty(3)
+    pb = np.empty(3)
+    support_full(sa[0], sa[1], VERTS0, sa[2], sa[3], u, pa)
+    support_full(sb[0], sb[1], VERTS0, sb[2], sb[3], -(r.T @ u), pb)
+    return pa @ u + pb @ (r.T @ u) * -1.0
+
+
+def check_invariants(sa_d, sb_d, r, t, st, out, scale):
+    d = out[C.OUT_DIST]
+    n = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
+    pa = out[C.OUT_PA:C.OUT_PA + 3]
+    pb = out[C.OUT_PB:C.OUT_PB + 3]
+    assert np.all(np.isfinite(out))
+    assert out[C.OUT_METHOD] == C.M_ANALYTIC
+    assert abs(np.linalg.norm(n) - 1.0) < 1e-12
+    np.testing.assert_allclose(pb - pa, d * n, atol=1e-12 * scale)
+    # witness points on the surfaces (B's point taken into B's frame)
+    assert abs(sdf(sa_d, pa)) < 1e-9 * scale
+    assert abs(sdf(sb_d, r.T @ (pb - t))) < 1e-9 * scale
+    # moving B by -distance along the normal brings the pair to touching
+    st2, out2 = run(sa_d, sb_d, r, t - d * n)
+    assert abs(out2[C.OUT_DIST]) < 1e-9 * scale
+    st3, _ = run(sa_d, sb_d, r, t - d * n + 1e-6 * scale * n)
+    assert st3 == C.ST_SEPARATED
+    # swapping A and B flips the normal and swaps the points
+    st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
+    assert st_s == st
+    assert abs(out_s[C.OUT_DIST] - d) < 1e-9 * scale
+    np.testing.assert_allclose(r @ out_s[C.OUT_NORMAL:C.OUT_NORMAL + 3], -n, atol=1e-7)
+
+
+def test_sphere_sphere_closed_form():
+    st, out = run({"type": "sphere", "radius": 1.0},
+                  {"type": "sphere", "radius": 0.5, "margin": 0.25}, np.eye(3),
+                  np.array([2.0, 0.0, 0.0]))
+    assert st == C.ST_SEPARATED
+    assert out[C.OUT_DIST] == pytest.approx(0.25, abs=1e-15)
+    np.testing.assert_allclose(out[1:4], [1, 0, 0])
+    np.testing.assert_allclose(out[4:7], [1, 0, 0])
+    np.testing.assert_allclose(out[7:10], [1.25, 0, 0])
+
+
+def test_sphere_sphere_coincident_centres_is_finite():
+    st, out = run({"type": "sphere", "radius": 1.0}, {"type": "sphere", "radius": 2.0},
+                  np.eye(3), np.zeros(3))
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-3.0)
+    assert np.all(np.isfinite(out))
+
+
+def test_sphere_centre_inside_box_uses_nearest_face():
+    # box 2 x 4 x 6 (half 1, 2, 3) with margin 0.1; sphere r = 0.5 at (0.7, 0.2, -0.5)
+    # in the box frame: nearest face +x at gap 0.3, depth = 0.3 + 0.5 + 0.1
+    box = {"type": "box", "size": [2.0, 4.0, 6.0], "margin": 0.1}
+    sph = {"type": "sphere", "radius": 0.5}
+    t = -np.array([0.7, 0.2, -0.5])   # box origin seen from the sphere (r = I)
+    st, out = run(sph, box, np.eye(3), t)
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.9, abs=1e-14)
+    # B must move along -x (its +x face is nearest to the sphere centre)
+    np.testing.assert_allclose(out[1:4], [-1, 0, 0], atol=1e-15)
+    check_invariants(sph, box, np.eye(3), t, st, out, 1.0)
+
+
+def test_capsule_capsule_parallel_and_crossing():
+    cap = {"type": "capsule", "radius": 0.2, "length": 2.0}
+    # parallel, overlapping along z, 0.5 apart in x: distance 0.1 exactly
+    st, out = run(cap, cap, np.eye(3), np.array([0.5, 0.0, 0.7]))
+    assert st == C.ST_SEPARATED
+    assert out[C.OUT_DIST] == pytest.approx(0.1, abs=1e-14)
+    np.testing.assert_allclose(out[1:4], [1, 0, 0], atol=1e-14)
+    # witness in the middle of the overlap (z in [-0.3, 1]), not jumping to an end
+    assert out[C.OUT_PA + 2] == pytest.approx(0.35)
+    # exactly collinear axes, end caps overlapping by 0.1
+    st, out = run(cap, cap, np.eye(3), np.array([0.0, 0.0, 2.3]))
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.1, abs=1e-14)
+    # crossing axes (B rotated 90 deg about x, centres coincide): depth r_a + r_b
+    rx = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
+    st, out = run(cap, cap, rx, np.zeros(3))
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.4, abs=1e-14)
+    assert abs(out[C.OUT_NORMAL + 0]) == pytest.approx(1.0)
+
+
+def test_unsupported_pairs_do_not_run():
+    plane = {"type": "plane", "normal": [0, 0, 1], "offset": 0.0}
+    out = np.full(C.OUT_SIZE, 7.0)
+    sa, _ = tup(plane)
+    assert collide_analytic(sa, sa, VERTS0, np.eye(3), np.zeros(3), out) == C.ST_NOT_RUN
+    sb, _ = tup({"type": "box", "size": [1, 1, 1]})
+    assert collide_analytic(sb, sb, VERTS0, np.eye(3), np.zeros(3), out) == C.ST_NOT_RUN
+    se, _ = tup({"type": "ellipsoid", "radii": [1, 2, 3]})
+    assert collide_analytic(se, sb, VERTS0, np.eye(3), np.zeros(3), out) == C.ST_NOT_RUN
+    assert np.all(out == 7.0)
+
+
+PAIRS = [("sphere", "sphere"), ("sphere", "box"), ("sphere", "capsule"),
+         ("capsule", "capsule"), ("box", "sphere"), ("capsule", "sphere")]
+
+
+@pytest.mark.parametrize("ka,kb", PAIRS)
+def test_random_pairs_against_coal_and_invariants(ka, kb):
+    rng = np.random.default_rng(PAIRS.index((ka, kb)) + 11)
+    hits = 0
+    n = 150
+    for _ in range(n):
+        sa_d = rand_shape(rng, ka)
+        sb_d = rand_shape(rng, kb)
+        sa, _ = tup(sa_d)
+        sb, _ = tup(sb_d)
+        scale = sa[1][7] + sb[1][7]
+        r = rot(rng)
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        t = u * rng.uniform(0.5, 1.5) * contact_offset(sa, sb, r, u)
+        st, out = run(sa_d, sb_d, r, t)
+        cd = coal_dist(sa_d, sb_d, r, t)
+        assert out[C.OUT_DIST] == pytest.approx(cd, abs=1e-8 * scale), (sa_d, sb_d, r, t)
+        hits += st != C.ST_SEPARATED
+        check_invariants(sa_d, sb_d, r, t, st, out, scale)
+    assert 0.3 * n <= hits <= 0.7 * n
+
+
+@pytest.mark.parametrize("kind", ["sphere", "box", "capsule", "ellipsoid", "cylinder",
+                                  "cone", "convex"])
+def test_plane_against_every_shape(kind):
+    rng = np.random.default_rng(["sphere", "box", "capsule", "ellipsoid", "cylinder",
+                                 "cone", "convex"].index(kind) + 101)
+    n = 120
+    hits = 0
+    for _ in range(n):
+        nrm = rng.normal(size=3)
+        nrm /= np.linalg.norm(nrm)
+        plane = {"type": "plane", "normal": list(nrm), "offset": float(rng.uniform(-1, 1))}
+        if kind == "convex":
+            pts = rng.normal(size=(12, 3))
+            shape = {"type": "convex", "points": pts.tolist()}
+            if rng.random() < 0.3:
+                shape["margin"] = rng.uniform(0, 0.2)
+        else:
+            shape = rand_shape(rng, kind)
+        sa, verts = tup(shape)
+        r = rot(rng)
+        t = rng.normal(size=3) * 1.5
+        # choose the offset so the signed distance is uniform in +-0.5 * A's radius
+        x = np.empty(3)
+        support_full(sa[0], sa[1], verts, sa[2], sa[3], -(r @ nrm), x)
+        plane["offset"] = float(nrm @ (r.T @ (x - t)) - rng.uniform(-0.5, 0.5) * sa[1][7])
+        sb, _ = tup(plane)
+        out = np.full(C.OUT_SIZE, np.nan)
+        st = collide_analytic(sa, sb, verts, r, t, out)
+        scale = sa[1][7]
+        # oracle: min over A of (n_b . x_b - d), exact by the support function
+        n_a = r @ nrm
+        if kind == "convex":
+            x_b = (verts - t) @ r            # rows: r^T (v - t)
+            ref = (x_b @ nrm).min() - shape.get("margin", 0.0) - plane["offset"]
+        else:
+            ref = coal_dist(shape, plane, r, t)
+        assert out[C.OUT_DIST] == pytest.approx(ref, abs=1e-9 * max(scale, 1.0))
+        d = out[C.OUT_DIST]
+        nv = out[1:4]
+        np.testing.assert_allclose(nv, -n_a, atol=1e-14)
+        np.testing.assert_allclose(out[7:10] - out[4:7], d * nv, atol=1e-12 * scale)
+        # pb on the plane
+        assert abs(sdf(plane, r.T @ (out[7:10] - t))) < 1e-12 * max(scale, 1.0)
+        hits += st != C.ST_SEPARATED
+        # move B (the plane) by depth along the normal: touching; a bit more: apart
+        out2 = np.empty(C.OUT_SIZE)
+        collide_analytic(sa, sb, verts, r, t - d * nv, out2)
+        assert abs(out2[C.OUT_DIST]) < 1e-12 * max(scale, 1.0) + 1e-14
+        st3 = collide_analytic(sa, sb, verts, r, t - d * nv + 1e-6 * nv, out2)
+        assert st3 == C.ST_SEPARATED
+        # plane first: normal flips
+        out_s = np.empty(C.OUT_SIZE)
+        st_s = collide_analytic(sb, sa, verts, r.T.copy(), -r.T @ t, out_s)
+        assert st_s == st
+        np.testing.assert_allclose(r @ out_s[1:4], -nv, atol=1e-12)
+        assert out_s[C.OUT_DIST] == pytest.approx(d, abs=1e-12)
+    assert 0.3 * n <= hits <= 0.7 * n

@@ -1,0 +1,251 @@
+"""Narrow-phase benchmark: our batch kernel vs MuJoCo's C narrow phase vs coal from Python.
+
+For every shape-type pair (canonical order, plane last) the same seeded cases
+(``common.pair_cases``: about half colliding, a fifth within 1% of touching) are run by
+
+  ours     ``kernels.narrowphase.collide_batch`` on ONE numba thread, methods gjk_epa,
+           mpr and auto (closed form where one exists, else GJK/EPA); median over
+           repeats of the whole batch, after a warm-up call, divided by the pair count.
+           GJK/EPA and MPR do not take planes (ST_NOT_RUN): plane rows show auto only.
+  mujoco   one MJCF model per shape pair: each shape on its own mocap body (poses baked
+           in the model), every geom contype=conaffinity=0, and the cases as explicit
+           <contact><pair> elements, so mj_collision runs exactly those pairs (its
+           bounding-sphere pre-test included, its broad phase finds nothing).  Timed:
+           ``mujoco.mj_collision(model, data)`` after one ``mj_kinematics``; divided by
+           the pair count.  Convex = MJCF mesh (MuJoCo builds the hull); MuJoCo has no
+           cone: n/a.
+  coal     a Python loop of ``coal.collide`` (CollisionRequest with enable_contact,
+           num_max_contacts=1) over prebuilt geometries and Transform3s, and separately
+           a loop of ``coal.distance`` (signed distance); per pair, loop overhead included.
+
+Agreement = fraction of cases where the peer's "in contact" equals ours (auto).
+
+    PYTHONPATH=. .venv/bin/python bench/narrowphase.py [--n 2000] [--quick]
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numba
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from bench.common import (KINDS, _fmt, coal_geometry, coal_transform, mujoco_assets_xml,  # noqa: E402
+                          mujoco_geom, pair_cases, timed, wxyz)
+from mkcollision_ros.kernels.constants import (M_AUTO, M_GJK_EPA, M_MPR, OUT_SIZE,  # noqa: E402
+                                               ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
+                                               ST_TOUCHING)
+from mkcollision_ros.kernels.narrowphase import collide_batch  # noqa: E402
+
+METHODS = (("gjk_epa", M_GJK_EPA), ("mpr", M_MPR), ("auto", M_AUTO))
+
+
+def run_ours(table, pairs, pos, quat, method, repeat):
+    out = np.zeros((len(pairs), OUT_SIZE))
+    st = np.zeros(len(pairs), np.int64)
+    args = (table.codes, table.params, table.vrange, table.verts, pairs, pos, quat, method,
+            out, st)
+    collide_batch(*args)
+    t = timed(lambda: collide_batch(*args), repeat) / len(pairs)
+    return t, st.copy(), out.copy()
+
+
+def build_mujoco(shapes, pos, quat, n):
+    import mujoco
+    assets = {}
+    bodies, pairs = [], []
+    for i, s in enumerate(shapes):
+        g = mujoco_geom(s, f"g{i}", assets, 'contype="0" conaffinity="0"',
+                        approx_cone=False)
+        if g is None:
+            return None
+        bodies.append(f'<body mocap="true" pos="{_fmt(pos[i])}" '
+                      f'quat="{_fmt(wxyz(quat[i]))}">{g}</body>')
+    for k in range(n):
+        pairs.append(f'<pair geom1="g{2 * k}" geom2="g{2 * k + 1}"/>')
+    xml = (f'<mujoco><size memory="400M"/><asset>{mujoco_assets_xml(assets)}</asset>'
+           f'<worldbody>{"".join(bodies)}</worldbody><contact>{"".join(pairs)}</contact>'
+           f'</mujoco>')
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return model, data
+
+
+def run_mujoco(shapes, pos, quat, n, repeat):
+    import mujoco
+    built = build_mujoco(shapes, pos, quat, n)
+    if built is None:
+        return None, None
+    model, data = built
+    mujoco.mj_collision(model, data)
+    t = timed(lambda: mujoco.mj_collision(model, data), repeat) / n
+    hit = np.zeros(n, bool)
+    g = data.contact.geom[:data.ncon]
+    hit[g[:, 0] // 2] = True
+    return t, hit
+
+
+def run_coal(shapes, pos, quat, n, repeat):
+    import coal
+    geoms = [coal_geometry(s) for s in shapes]
+    tfs = [coal_transform(pos[i], quat[i]) for i in range(len(shapes))]
+    req = coal.CollisionRequest()
+    req.enable_contact = True
+    req.num_max_contacts = 1
+    res = coal.CollisionResult()
+    dreq = coal.DistanceRequest()
+    dres = coal.DistanceResult()
+    hit = np.zeros(n, bool)
+    dist = np.zeros(n)
+
+    def loop_collide():
+        for k in range(n):
+            res.clear()
+            coal.collide(geoms[2 * k], tfs[2 * k], geoms[2 * k + 1], tfs[2 * k + 1], req, res)
+            hit[k] = res.isCollision()
+
+    def loop_distance():
+        for k in range(n):
+            dres.clear()
+            dist[k] = coal.distance(geoms[2 * k], tfs[2 * k], geoms[2 * k + 1],
+                                    tfs[2 * k + 1], dreq, dres)
+
+    tc = timed(loop_collide, repeat) / n
+    try:
+        td = timed(loop_distance, repeat) / n
+    except Exception:  # noqa: BLE001 - a pair coal cannot measure the distance of
+        td = float("nan")
+    return tc, td, hit.copy()
+
+
+def _us(t):
+    return "n/a" if t is None or t != t else f"{t * 1e6:.2f}"
+
+
+def _ratio(a, b):
+    return "n/a" if a is None or b is None or a != a or b != b else f"{a / b:.2f}"
+
+
+def _pct(x):
+    return "n/a" if x is None else f"{100 * x:.1f}"
+
+
+def bench(n, repeat, seed):
+    numba.set_num_threads(1)
+    rows = []
+    problems = []
+    for ia, a in enumerate(KINDS):
+        for b in KINDS[ia:]:
+            if a == "plane" and b == "plane":
+                continue
+            shapes, table, pairs, pos, quat = pair_cases(a, b, n, seed=seed + 101 * ia
+                                                         + KINDS.index(b))
+            ours = {}
+            for name, m in METHODS:
+                t, st, out = run_ours(table, pairs, pos, quat, m, repeat)
+                if np.all(st == ST_NOT_RUN):
+                    ours[name] = (None, None)
+                    continue
+                ours[name] = (t, st)
+                bad = np.flatnonzero((st == ST_FAILED) | ~np.isfinite(out[:, 0]))
+                if len(bad):
+                    problems.append((a, b, name, len(bad), int(bad[0])))
+            st_auto = ours["auto"][1]
+            hit = (st_auto == ST_TOUCHING) | (st_auto == ST_PENETRATING)
+            t_mj, hit_mj = run_mujoco(shapes, pos, quat, n, repeat)
+            t_cc, t_cd, hit_cc = run_coal(shapes, pos, quat, n, max(1, repeat // 3))
+            same = {}
+            for name in ("gjk_epa", "mpr"):
+                st = ours[name][1]
+                same[name] = (None if st is None else
+                              float(np.mean(((st == ST_TOUCHING) | (st == ST_PENETRATING))
+                                            == hit)))
+            t_auto = ours["auto"][0]
+            rows.append([
+                f"{a}-{b}", str(n), _pct(hit.mean()), _us(ours["gjk_epa"][0]),
+                _us(ours["mpr"][0]), _us(t_auto), _us(t_mj), _us(t_cc), _us(t_cd),
+                _ratio(t_auto, t_mj),
+                _ratio(min(x for x in (ours["gjk_epa"][0], ours["mpr"][0], t_auto)
+                           if x is not None), t_mj),
+                _ratio(t_auto, t_cc),
+                _pct(None if hit_mj is None else float(np.mean(hit_mj == hit))),
+                _pct(float(np.mean(hit_cc == hit))),
+                f"{_pct(same['gjk_epa'])}/{_pct(same['mpr'])}",
+            ])
+            print(f"  done {a}-{b}", file=sys.stderr, flush=True)
+    head = ["pair", "n", "hit % (auto)", "gjk_epa µs", "mpr µs", "auto µs", "mujoco µs",
+            "coal collide µs", "coal distance µs", "auto/mujoco", "best/mujoco",
+            "auto/coal collide", "agree mujoco %", "agree coal %",
+            "gjk/mpr agree auto %"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for r in rows:
+        print("| " + " | ".join(r) + " |")
+    if problems:
+        print("\nFailed / non-finite results (pair, method, count, first case index):")
+        for p in problems:
+            print(f"- {p}")
+    return rows
+
+
+STARTUP = r"""
+import time
+t0 = time.perf_counter()
+import numpy as np
+from mkcollision_ros.shapes import build_table
+from mkcollision_ros.kernels.narrowphase import collide_batch
+t1 = time.perf_counter()
+tb = build_table([{"type": "sphere", "radius": 0.5}, {"type": "box", "size": [1, 1, 1]}])
+out = np.zeros((1, 12)); st = np.zeros(1, np.int64)
+collide_batch(tb.codes, tb.params, tb.vrange, tb.verts, np.array([[0, 1]]),
+              np.array([[0, 0, 0], [0.9, 0, 0.]]), np.tile([0, 0, 0, 1.], (2, 1)), 0, out, st)
+t2 = time.perf_counter()
+print(f"{t1 - t0:.3f} {t2 - t0:.3f}")
+"""
+
+
+def startup():
+    """First-run compile time (empty NUMBA_CACHE_DIR) and cached start-up time."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    rows = []
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache,
+                   PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        for label in ("first run (empty cache, compiles)", "second run (cached)"):
+            w0 = time.perf_counter()
+            r = subprocess.run([sys.executable, "-c", STARTUP], env=env, cwd=root,
+                               capture_output=True, text=True, check=True)
+            wall = time.perf_counter() - w0
+            imp, first = map(float, r.stdout.split())
+            rows.append((label, imp, first, wall))
+    print("| start-up | import s | import -> first collide_batch result s | process wall s |")
+    print("|---|---|---|---|")
+    for label, imp, first, wall in rows:
+        print(f"| {label} | {imp:.2f} | {first:.2f} | {wall:.2f} |")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--n", type=int, default=2000, help="cases per shape pair")
+    ap.add_argument("--repeat", type=int, default=9, help="timed repeats (median)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--quick", action="store_true", help="n=100, 3 repeats")
+    ap.add_argument("--no-startup", action="store_true", help="skip the compile timing")
+    args = ap.parse_args()
+    if args.quick:
+        args.n, args.repeat = 100, 3
+    print(f"## Narrow phase: {args.n} cases per pair, median of {args.repeat}, "
+          f"numba threads = 1\n")
+    bench(args.n, args.repeat, args.seed)
+    if not args.no_startup:
+        print()
+        startup()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,173 @@
+"""Narrow-phase dispatcher (one pair) and batch kernel (many pairs, world frame).
+
+``collide_pair`` puts a pair in the canonical order (code_a <= code_b, so a plane is
+always B), calls the method's kernel in A's frame, and maps the answer back when it had
+to swap: the normal flips, the witness points exchange and return to A's frame.
+``collide_batch`` runs ``collide_pair`` over pairs with ``prange``; each pair writes only
+its own row of ``out`` / ``status``, so the result does not depend on the thread count.
+
+Method codes (constants.M_*):
+  M_AUTO               the closed form when one exists (kernels/analytic.py), else GJK/EPA
+  M_GJK_EPA            kernels/gjk_epa.py (planes: ST_NOT_RUN)
+  M_MPR                kernels/mpr.py (planes: ST_NOT_RUN)
+  M_ANALYTIC           kernels/analytic.py (ST_NOT_RUN for pairs without a closed form)
+  M_ELLIPSOID_EXACT    kernels/ellipsoid.py ``ellipsoid_exact`` (boolean test)
+  M_ELLIPSOID_SAMPLED  kernels/ellipsoid.py ``ellipsoid_sampled`` with
+                       ELLIPSOID_SAMPLED_SUBDIV subdivisions (boolean test)
+Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
+the requested method code.
+"""
+import numpy as np
+
+from .analytic import collide_analytic
+from .constants import (M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
+                        M_GJK_EPA, M_MPR, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL,
+                        OUT_PA, OUT_PB, OUT_SIZE, PLANE, ST_NOT_RUN)
+from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
+from .geometry import quat_to_matrix
+from .gjk_epa import gjk_epa
+from .jit import njit_kernel, njit_parallel, prange
+from .mpr import mpr
+
+# subdivision level passed to ellipsoid_sampled by the dispatcher
+ELLIPSOID_SAMPLED_SUBDIV = 3
+
+
+@njit_kernel
+def _blank(out, method):
+    for c in range(OUT_SIZE):
+        out[c] = 0.0
+    out[OUT_NORMAL + 2] = 1.0
+    out[OUT_METHOD] = method
+
+
+@njit_kernel
+def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out):
+    """Run ``method`` on a pair already in canonical order; result in A's frame."""
+    has_plane = sa[0] == PLANE or sb[0] == PLANE
+    if method == M_AUTO or method == M_ANALYTIC:
+        st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
+        if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
+            if st == ST_NOT_RUN:
+                _blank(out, method)
+            return st
+        return gjk_epa(sa, sb, verts, r_ab, t_ab, out)
+    if method == M_GJK_EPA:
+        return gjk_epa(sa, sb, verts, r_ab, t_ab, out)
+    if method == M_MPR:
+        if has_plane:
+            return ST_NOT_RUN
+        return mpr(sa, sb, verts, r_ab, t_ab, out)
+    if method == M_ELLIPSOID_EXACT:
+        return ellipsoid_exact(sa, sb, r_ab, t_ab, out)
+    if method == M_ELLIPSOID_SAMPLED:
+        return ellipsoid_sampled(sa, sb, r_ab, t_ab, ELLIPSOID_SAMPLED_SUBDIV, out)
+    return ST_NOT_RUN
+
+
+@njit_kernel
+def collide_pair(sa, sb, verts, r_ab, t_ab, method, out):
+    """Collide one pair with the given method code; result row in A's frame.
+
+    sa, sb  shape tuples (code int64, prm float64[8], v0 int64, vn int64)
+    verts   float64 (M, 3) convex vertices (body frames)
+    r_ab    float64 (3, 3), t_ab float64 (3,): pose of B in A's frame (m)
+    method  int64 method code (constants.M_*)
+    out     float64 (OUT_SIZE,): signed distance (m, < 0 penetrating), unit normal A -> B,
+            witness points pa on A and pb on B (A's frame), iterations, method code
+    Returns the status code (constants.ST_*).
+    """
+    _blank(out, method)
+    if sa[0] <= sb[0]:
+        st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out)
+        if st == ST_NOT_RUN:
+            _blank(out, method)
+        return st
+    # swap to canonical order: solve (B, A) in B's frame, then map back
+    r_ba = np.empty((3, 3))
+    t_ba = np.empty(3)
+    for i in range(3):
+        for j in range(3):
+            r_ba[i, j] = r_ab[j, i]
+    for i in range(3):
+        t_ba[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
+    tmp = np.empty(OUT_SIZE)
+    _blank(tmp, method)
+    st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp)
+    if st == ST_NOT_RUN:
+        _blank(out, method)
+        return st
+    out[OUT_DIST] = tmp[OUT_DIST]
+    for i in range(3):
+        n = 0.0
+        pa = t_ab[i]
+        pb = t_ab[i]
+        for j in range(3):
+            n -= r_ab[i, j] * tmp[OUT_NORMAL + j]
+            pa += r_ab[i, j] * tmp[OUT_PB + j]
+            pb += r_ab[i, j] * tmp[OUT_PA + j]
+        out[OUT_NORMAL + i] = n
+        out[OUT_PA + i] = pa
+        out[OUT_PB + i] = pb
+    out[OUT_ITERS] = tmp[OUT_ITERS]
+    out[OUT_METHOD] = tmp[OUT_METHOD]
+    return st
+
+
+@njit_kernel
+def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
+                  pos_b, quat_b, method, out):
+    """One pair from world poses; ``out`` (OUT_SIZE,) in the WORLD frame.
+
+    prm_* float64 (8,), vr_* int64 (2,) (first vertex, count), pos_* float64 (3,) m,
+    quat_* float64 (4,) xyzw unit.  Returns the status code."""
+    ra = quat_to_matrix(quat_a)
+    rb = quat_to_matrix(quat_b)
+    r_ab = np.empty((3, 3))
+    t_ab = np.empty(3)
+    for i in range(3):
+        t_ab[i] = (ra[0, i] * (pos_b[0] - pos_a[0]) + ra[1, i] * (pos_b[1] - pos_a[1])
+                   + ra[2, i] * (pos_b[2] - pos_a[2]))
+        for j in range(3):
+            r_ab[i, j] = ra[0, i] * rb[0, j] + ra[1, i] * rb[1, j] + ra[2, i] * rb[2, j]
+    sa = (code_a, prm_a, vr_a[0], vr_a[1])
+    sb = (code_b, prm_b, vr_b[0], vr_b[1])
+    row = np.empty(OUT_SIZE)
+    st = collide_pair(sa, sb, verts, r_ab, t_ab, method, row)
+    out[OUT_DIST] = row[OUT_DIST]
+    for i in range(3):
+        n = 0.0
+        pa = pos_a[i]
+        pb = pos_a[i]
+        for j in range(3):
+            n += ra[i, j] * row[OUT_NORMAL + j]
+            pa += ra[i, j] * row[OUT_PA + j]
+            pb += ra[i, j] * row[OUT_PB + j]
+        out[OUT_NORMAL + i] = n
+        out[OUT_PA + i] = pa
+        out[OUT_PB + i] = pb
+    out[OUT_ITERS] = row[OUT_ITERS]
+    out[OUT_METHOD] = row[OUT_METHOD]
+    return st
+
+
+@njit_parallel
+def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, out,
+                  status):
+    """Collide every pair (i, j) of ``pairs``; results in the WORLD frame.
+
+    codes  int64 (N,)        shape codes          params float64 (N, 8) parameter rows
+    vrange int64 (N, 2)      convex vertex ranges verts  float64 (M, 3) body frames
+    pairs  int64 (P, 2)      shape indices (A, B)
+    pos_w  float64 (N, 3)    positions (m)        quat_w float64 (N, 4) xyzw, unit
+    method int64             method code (constants.M_*)
+    out    float64 (P, OUT_SIZE)  written: signed distance, normal A -> B, pa, pb (world)
+    status int64 (P,)        written: status codes (constants.ST_*)
+    Each pair writes only its own slot: deterministic for any number of threads.
+    """
+    for k in prange(pairs.shape[0]):
+        i = pairs[k, 0]
+        j = pairs[k, 1]
+        status[k] = collide_world(codes[i], params[i], vrange[i], codes[j], params[j],
+                                  vrange[j], verts, pos_w[i], quat_w[i], pos_w[j],
+                                  quat_w[j], method, out[k])

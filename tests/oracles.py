@@ -1,0 +1,306 @@
+"""Slow, obvious oracles and shared helpers for the narrow-phase tests.
+
+* random shape dicts and poses (seeded, vectorised), in three size regimes;
+* a coal adapter (peer oracle): ``coal_signed_distance(shape_a, pose_a, shape_b, pose_b)``
+  -> (distance, normal A->B, point_a, point_b), world frame;
+* implicit functions / support functions in numpy, to check that witness points lie on
+  the surfaces.
+
+coal conventions verified here (coal 3.0.3): Box takes full side lengths; Capsule(r, L)
+with L the full segment length; Cylinder(r, h) and Cone(r, h) with h the full height,
+centred, the cone's tip at +h/2 (a sphere on the tip at z = h/2 + r_s touches).
+coal.distance returns a signed distance (negative when penetrating) and its ``normal``
+points from shape 1 to shape 2.
+"""
+import math
+
+import numpy as np
+
+TYPES = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex")
+
+
+# --- random inputs -------------------------------------------------------------------------
+def random_quats(rng, n):
+    """(n, 4) unit quaternions xyzw, uniform on SO(3)."""
+    q = rng.normal(size=(n, 4))
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def quat_matrix(q):
+    """Rotation matrix of one xyzw quaternion."""
+    x, y, z, w = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def random_shape(rng, kind, size=1.0, ratio=4.0):
+    """A random shape dict of the given type; dimensions in [size/ratio, size]."""
+    def dim(k=None):
+        return size * (1.0 / ratio + (1.0 - 1.0 / ratio) * rng.random(k))
+    if kind == "sphere":
+        return {"type": "sphere", "radius": float(dim())}
+    if kind == "ellipsoid":
+        return {"type": "ellipsoid", "radii": dim(3).tolist()}
+    if kind == "box":
+        return {"type": "box", "size": (2 * dim(3)).tolist()}
+    if kind in ("capsule", "cylinder", "cone"):
+        key = "length" if kind == "capsule" else "height"
+        return {"type": kind, "radius": float(dim()), key: float(2 * dim())}
+    if kind == "convex":
+        n = int(rng.integers(6, 20))
+        p = rng.normal(size=(n, 3))
+        p /= np.linalg.norm(p, axis=1, keepdims=True)
+        return {"type": "convex", "points": (p * dim(3)).tolist()}
+    raise ValueError(kind)
+
+
+def bounding_radius(shape):
+    from mkcollision_ros.shapes import shape_row
+    return float(shape_row(shape)[1][7])
+
+
+# --- coal adapter ---------------------------------------------------------------------------
+def coal_shape(shape):
+    import coal
+    kind = shape["type"]
+    if kind == "sphere":
+        g = coal.Sphere(shape["radius"])
+    elif kind == "ellipsoid":
+        g = coal.Ellipsoid(*shape["radii"])
+    elif kind == "box":
+        g = coal.Box(*shape["size"])
+    elif kind == "capsule":
+        g = coal.Capsule(shape["radius"], shape["length"])
+    elif kind == "cylinder":
+        g = coal.Cylinder(shape["radius"], shape["height"])
+    elif kind == "cone":
+        g = coal.Cone(shape["radius"], shape["height"])
+    elif kind == "convex":
+        m = coal.BVHModelOBBRSS()
+        pts = np.asarray(shape["points"], dtype=np.float64)
+        m.beginModel(0, len(pts))
+        m.addVertices(pts)
+        m.endModel()
+        m.buildConvexHull(False, "Qt")
+        g = m.convex
+    else:
+        raise ValueError(kind)
+    if shape.get("margin", 0.0):
+        g.setSweptSphereRadius(float(shape["margin"]))
+    return g
+
+
+def coal_transform(pose):
+    import coal
+    p, q = pose
+    return coal.Transform3s(quat_matrix(np.asarray(q, dtype=np.float64)),
+                            np.asarray(p, dtype=np.float64))
+
+
+def coal_request():
+    import coal
+    req = coal.DistanceRequest()
+    req.enable_signed_distance = True
+    req.gjk_tolerance = 1e-12
+    req.gjk_max_iterations = 1000
+    req.epa_tolerance = 1e-10      # tighter (1e-12) makes coal's EPA fail (-DBL_MAX)
+    req.epa_max_iterations = 255
+    return req
+
+
+def coal_signed_distance(ga, pose_a, gb, pose_b, req=None):
+    """(distance, normal A->B, point_a, point_b) from coal, world frame.  coal's EPA
+    sometimes gives up (returns -DBL_MAX) at tight tolerances; then it is retried with
+    looser ones (1e-8, 1e-6).  Returns NaNs if every try failed."""
+    import coal
+    ta, tb = coal_transform(pose_a), coal_transform(pose_b)
+    for tol in (None, 1e-8, 1e-6):
+        r = req or coal_request()
+        if tol is not None:
+            r.epa_tolerance = tol
+        res = coal.DistanceResult()
+        d = coal.distance(ga, ta, gb, tb, r, res)
+        if abs(d) < 1e100:
+            return d, np.array(res.normal), np.array(res.getNearestPoint1()), \
+                np.array(res.getNearestPoint2())
+    nan = np.full(3, np.nan)
+    return np.nan, nan, nan, nan
+
+
+# --- implicit functions / supports (body frame) --------------------------------------------
+def support_np(shape, d):
+    """Support point of the whole shape (body frame) along d (3,), numpy oracle."""
+    d = np.asarray(d, dtype=np.float64)
+    u = d / np.linalg.norm(d)
+    kind = shape["type"]
+    m = shape.get("margin", 0.0)
+    if kind == "sphere":
+        return (shape["radius"] + m) * u
+    if kind == "ellipsoid":
+        r = np.asarray(shape["radii"])
+        e = r * r * d
+        return e / math.sqrt(float(e @ d)) + m * u
+    if kind == "box":
+        h = 0.5 * np.asarray(shape["size"])
+        return np.where(d >= 0, h, -h) + m * u
+    if kind == "capsule":
+        return np.array([0, 0, math.copysign(shape["length"] / 2, d[2])]) \
+            + (shape["radius"] + m) * u
+    if kind in ("cylinder", "cone"):
+        r, h = shape["radius"], shape["height"] / 2
+        s = math.hypot(d[0], d[1])
+        b = np.array([r * d[0] / s, r * d[1] / s]) if s > 0 else np.array([r, 0.0])
+        if kind == "cylinder":
+            return np.array([b[0], b[1], math.copysign(h, d[2])]) + m * u
+        tip = np.array([0.0, 0.0, h])
+        rim = np.array([b[0], b[1], -h])
+        return (tip if tip @ d >= rim @ d else rim) + m * u
+    if kind == "convex":
+        p = np.asarray(shape["points"])
+        return p[np.argmax(p @ d)] + m * u
+    raise ValueError(kind)
+
+
+def support_value(shape, d):
+    """Support function h(d) = max_x x.d for unit d (body frame)."""
+    d = np.asarray(d, dtype=np.float64)
+    return float(support_np(shape, d) @ (d / np.linalg.norm(d)))
+
+
+def surface_gap(shape, pose, p_w, n_w):
+    """How far the world point p_w is from being the shape's support point along n_w
+    (world): h(n) - n.p; zero for a point on the surface with outward normal n."""
+    R = quat_matrix(np.asarray(pose[1], dtype=np.float64))
+    p = R.T @ (np.asarray(p_w) - np.asarray(pose[0]))
+    n = R.T @ np.asarray(n_w)
+    n = n / np.linalg.norm(n)
+    return support_value(shape, n) - float(n @ p)
+
+
+def inside_value(shape, pose, p_w, n_dirs=200, rng=None):
+    """Max over sampled unit directions of (u.p - h(u)): <= 0 inside the shape, and ~0
+    on its surface (slow oracle of the signed distance from outside)."""
+    rng = rng or np.random.default_rng(0)
+    R = quat_matrix(np.asarray(pose[1], dtype=np.float64))
+    p = R.T @ (np.asarray(p_w) - np.asarray(pose[0]))
+    u = rng.normal(size=(n_dirs, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return max(float(ui @ p) - support_value(shape, ui) for ui in u)
+
+
+# --- batch runner -------------------------------------------------------------------------
+def run_batch(shapes_a, pos_a, quat_a, shapes_b, pos_b, quat_b, method="gjk_epa"):
+    """Collide pair k = (shapes_a[k], shapes_b[k]) at the given world poses through the
+    batch kernel.  Returns (out (P, OUT_SIZE) world frame, status (P,))."""
+    from mkcollision_ros.kernels.constants import METHOD_NAMES, OUT_SIZE
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    from mkcollision_ros.shapes import build_table
+    n = len(shapes_a)
+    table = build_table(list(shapes_a) + list(shapes_b))
+    pairs = np.stack([np.arange(n), np.arange(n) + n], axis=1).astype(np.int64)
+    pos = np.ascontiguousarray(np.concatenate([pos_a, pos_b]), dtype=np.float64)
+    quat = np.concatenate([quat_a, quat_b])
+    quat = np.ascontiguousarray(quat / np.linalg.norm(quat, axis=1, keepdims=True))
+    out = np.zeros((n, OUT_SIZE))
+    status = np.zeros(n, dtype=np.int64)
+    collide_batch(table.codes, table.params, table.vrange,
+                  np.ascontiguousarray(table.verts), pairs, pos, quat,
+                  np.int64(METHOD_NAMES.index(method)), out, status)
+    return out, status
+
+
+def random_pairs(rng, kind_a, kind_b, n, size=1.0, ratio=4.0, offset=(0.0, 1.2),
+                 centre=0.0):
+    """n random pairs of the two types: B's centre at a random direction from A's at a
+    distance uniform in offset * (bounding radius sum).  Returns
+    (shapes_a, pos_a, quat_a, shapes_b, pos_b, quat_b)."""
+    sa = [random_shape(rng, kind_a, size, ratio) for _ in range(n)]
+    sb = [random_shape(rng, kind_b, size, ratio) for _ in range(n)]
+    ra = np.array([bounding_radius(s) for s in sa])
+    rb = np.array([bounding_radius(s) for s in sb])
+    u = rng.normal(size=(n, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    f = offset[0] + (offset[1] - offset[0]) * rng.random(n)
+    pos_a = centre + size * rng.normal(size=(n, 3))
+    pos_b = pos_a + u * (f * (ra + rb))[:, None]
+    return sa, pos_a, random_quats(rng, n), sb, pos_b, random_quats(rng, n)
+
+
+# --- slow oracle: signed distance = -min over unit u of h_{A-B}(u) -------------------------
+def support_values(shape, d):
+    """Support function h(u) of the whole shape for K unit directions d (K, 3), body
+    frame, vectorised."""
+    kind = shape["type"]
+    m = shape.get("margin", 0.0)
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    if kind == "sphere":
+        h = np.full(len(d), shape["radius"])
+    elif kind == "ellipsoid":
+        a, b, c = shape["radii"]
+        h = np.sqrt((a * x) ** 2 + (b * y) ** 2 + (c * z) ** 2)
+    elif kind == "box":
+        hx, hy, hz = 0.5 * np.asarray(shape["size"])
+        h = hx * np.abs(x) + hy * np.abs(y) + hz * np.abs(z)
+    elif kind == "capsule":
+        h = shape["radius"] + 0.5 * shape["length"] * np.abs(z)
+    elif kind == "cylinder":
+        h = shape["radius"] * np.hypot(x, y) + 0.5 * shape["height"] * np.abs(z)
+    elif kind == "cone":
+        hh = 0.5 * shape["height"]
+        h = np.maximum(hh * z, shape["radius"] * np.hypot(x, y) - hh * z)
+    elif kind == "convex":
+        h = (d @ np.asarray(shape["points"]).T).max(axis=1)
+    else:
+        raise ValueError(kind)
+    return h + m
+
+
+def cso_support(shape_a, pose_a, shape_b, pose_b, u):
+    """h_{A-B}(u) for K world directions u (K, 3): h_A(u) + h_B(-u)."""
+    ra = quat_matrix(np.asarray(pose_a[1], dtype=np.float64))
+    rb = quat_matrix(np.asarray(pose_b[1], dtype=np.float64))
+    ha = support_values(shape_a, u @ ra) + u @ np.asarray(pose_a[0], dtype=np.float64)
+    hb = support_values(shape_b, -u @ rb) - u @ np.asarray(pose_b[0], dtype=np.float64)
+    return ha + hb
+
+
+def _sphere_dirs(n, rng):
+    u = rng.normal(size=(n, 3))
+    return u / np.linalg.norm(u, axis=1, keepdims=True)
+
+
+def signed_distance_oracle(shape_a, pose_a, shape_b, pose_b, n_start=4000, n_keep=8,
+                           n_iter=400, rng=None):
+    """Signed distance by brute force: -min over unit u of h_{A-B}(u) (the minimum is
+    the penetration depth when the origin is inside A - B, and minus the distance when
+    it is outside).  Sampled start directions, then a shrinking random-pattern search
+    around the best few.  Returns (signed distance, unit normal A -> B (world))."""
+    rng = rng or np.random.default_rng(12345)
+    # random starts plus both bodies' axes (face normals of boxes, caps of cylinders
+    # and cones: kinks of h where a random pattern search converges slowly)
+    axes = np.concatenate([quat_matrix(np.asarray(pose_a[1], dtype=np.float64)).T,
+                           quat_matrix(np.asarray(pose_b[1], dtype=np.float64)).T])
+    u = np.concatenate([_sphere_dirs(n_start, rng), axes, -axes])
+    h = cso_support(shape_a, pose_a, shape_b, pose_b, u)
+    best_u, best_h = None, np.inf
+    for k in np.argsort(h)[:n_keep]:
+        uk, hk, step = u[k], h[k], 0.05
+        for _ in range(n_iter):
+            cand = uk + step * _sphere_dirs(64, rng)
+            cand /= np.linalg.norm(cand, axis=1, keepdims=True)
+            hc = cso_support(shape_a, pose_a, shape_b, pose_b, cand)
+            j = int(np.argmin(hc))
+            if hc[j] < hk:
+                uk, hk = cand[j], hc[j]
+            else:
+                step *= 0.5
+            if step < 1e-10:
+                break
+        if hk < best_h:
+            best_u, best_h = uk, hk
+    # u is the outward normal of A - B: the normal from A to B in both regimes.
+    # -best_h is a lower bound of the true signed distance (h(u) >= min h).
+    return -best_h, best_u

@@ -1,0 +1,121 @@
+"""ArbiterSet on hand-made contacts: ids, merging, drift, reduction, staleness, events."""
+import numpy as np
+
+from mkcollision_ros.arbiters import ArbiterSet, quat_matrices
+
+IDENT = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]])
+UP = np.array([0.0, 0.0, 1.0])
+
+
+def touching(points, depth=1e-3):
+    """Contacts of pair (0, 1) on the plane z = 0, A below (normal +z)."""
+    p = np.atleast_2d(np.asarray(points, float))
+    pa = p.copy()
+    pb = p.copy()
+    pb[:, 2] -= depth
+    return {(0, 1): (pa, pb, UP)}
+
+
+def make(**kw):
+    args = dict(merge_distance=0.02, drift_threshold=0.01, max_contacts=4, stale_steps=3)
+    args.update(kw)
+    return ArbiterSet(**args)
+
+
+def test_quat_matrices_match_rotation():
+    q = np.array([[0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)]])
+    assert np.allclose(quat_matrices(q)[0] @ [1.0, 0, 0], [0, 1.0, 0])
+
+
+def test_merge_keeps_id_and_new_contacts_get_new_ids():
+    s = make()
+    pos = np.zeros((2, 3))
+    ev = s.update(pos, IDENT, touching([[0, 0, 0]]), set())
+    assert ev == [("began", 0, 1, -1), ("began", 0, 1, 0)]
+    ev = s.update(pos, IDENT, touching([[0.015, 0, 0]]), set())      # within 0.02
+    c = s.contacts(pos, IDENT)
+    assert c["contact_id"].tolist() == [0] and c["age"].tolist() == [1]
+    assert np.allclose(c["point_a"][0], [0.015, 0, 0])
+    assert ev == [("persisted", 0, 1, -1), ("persisted", 0, 1, 0)]
+    # far away: a new id; the old one stays while it has not drifted
+    ev = s.update(pos, IDENT, touching([[0.5, 0, 0]]), set())
+    c = s.contacts(pos, IDENT)
+    assert c["contact_id"].tolist() == [0, 1]
+    assert ("began", 0, 1, 1) in ev and ("persisted", 0, 1, 0) in ev
+
+
+def test_contacts_follow_the_bodies_and_drift_is_dropped():
+    s = make()
+    pos = np.zeros((2, 3))
+    s.update(pos, IDENT, touching([[0.1, 0, 0]]), set())
+    # both bodies move together by (1, 2, 3) and A turns 90 deg about z with B about
+    # the same axis through the contact: points stay together -> kept, moved
+    q = np.array([[0, 0, np.sin(np.pi / 4), np.cos(np.pi / 4)]] * 2)
+    pos2 = np.array([[1.0, 2, 3], [1.0, 2, 3]])
+    ev = s.update(pos2, q, {}, {(0, 1)})                 # unconfirmed: no new contact
+    c = s.contacts(pos2, q)
+    assert ev[0] == ("persisted", 0, 1, -1)
+    assert np.allclose(c["point_a"][0], [1.0, 2.1, 3.0])
+    assert np.allclose(c["normal"][0], UP)
+    # B lifts by more than drift_threshold along the normal: the contact ends
+    pos3 = pos2 + [[0, 0, 0], [0, 0, 0.02]]
+    ev = s.update(pos3, q, {}, {(0, 1)})
+    assert ("ended", 0, 1, 0) in ev and len(s.contacts(pos3, q)["contact_id"]) == 0
+    # B slides across the normal by more than the threshold: dropped as well
+    s = make()
+    s.update(pos, IDENT, touching([[0.0, 0, 0]]), set())
+    ev = s.update(pos + [[0, 0, 0], [0.011, 0, 0]], IDENT, {}, {(0, 1)})
+    assert ("ended", 0, 1, 0) in ev
+    # but within it, kept
+    s = make()
+    s.update(pos, IDENT, touching([[0.0, 0, 0]]), set())
+    ev = s.update(pos + [[0, 0, 0], [0.009, 0, 0.009]], IDENT, {}, {(0, 1)})
+    assert ("persisted", 0, 1, 0) in ev
+
+
+def test_reduction_keeps_deepest_and_largest_area():
+    rng = np.random.default_rng(0)
+    s = make()
+    grid = np.array([[x, y, 0.0] for x in (-1, 0, 1) for y in (-1, 0, 1)])
+    grid = grid[rng.permutation(9)]
+    pa = grid.copy()
+    pb = grid.copy()
+    pb[:, 2] -= 1e-3
+    deep = int(np.flatnonzero((grid[:, 0] == 0) & (grid[:, 1] == 1))[0])   # an edge middle
+    pb[deep, 2] = -5e-3
+    ev = s.update(np.zeros((2, 3)), IDENT, {(0, 1): (pa, pb, UP)}, set())
+    c = s.contacts(np.zeros((2, 3)), IDENT)
+    assert len(c["contact_id"]) == 4
+    kept = c["point_a"]
+    assert any(np.allclose(k, grid[deep]) for k in kept)
+    assert np.isclose(c["depth"].max(), 5e-3)
+    # the other three span the far side: with (0, 1) kept, the best quad uses both far
+    # corners (-1, -1), (1, -1) and one of (+-1, 0)/(+-1, 1)
+    assert sum(np.allclose(k[:2], [-1, -1]) or np.allclose(k[:2], [1, -1]) for k in kept) == 2
+    # pruned new contacts never began
+    began = [e for e in ev if e[0] == "began" and e[3] >= 0]
+    assert len(began) == 4
+    assert c["contact_id"].tolist() == sorted(c["contact_id"].tolist())
+
+
+def test_stale_unconfirmed_pair_ends_after_stale_steps():
+    s = make(stale_steps=3)
+    pos = np.zeros((2, 3))
+    s.update(pos, IDENT, touching([[0, 0, 0]]), set())
+    kinds = []
+    for _ in range(3):
+        ev = s.update(pos, IDENT, {}, {(0, 1)})
+        kinds.append(ev[0][0])
+    assert kinds == ["persisted", "persisted", "ended"]
+    assert len(s) == 0 and s.pairs().shape == (0, 2)
+
+
+def test_separation_ends_immediately_and_ids_are_never_reused():
+    s = make()
+    pos = np.zeros((2, 3))
+    s.update(pos, IDENT, touching([[0, 0, 0]]), set())
+    ev = s.update(pos, IDENT, {}, set())
+    assert ev == [("ended", 0, 1, -1), ("ended", 0, 1, 0)]
+    assert s.update(pos, IDENT, {}, set()) == []
+    ev = s.update(pos, IDENT, touching([[0, 0, 0]]), set())
+    assert ev == [("began", 0, 1, -1), ("began", 0, 1, 1)]

@@ -1,0 +1,332 @@
+"""The scene pipeline end to end, with the real narrow phase."""
+import math
+
+import numba
+import numpy as np
+import pytest
+
+from mkcollision_ros.kernels.constants import ST_PENETRATING, ST_TOUCHING
+from mkcollision_ros.pipeline import Pipeline, PipelineConfig, StepResult
+
+PLANE = {"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
+         "static": True}
+ID = [0.0, 0.0, 0.0, 1.0]
+
+
+def quat_axis(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
+
+
+def quat_mul(a, b):
+    x1, y1, z1, w1 = a
+    x2, y2, z2, w2 = b
+    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
+
+
+def rotm(q):
+    x, y, z, w = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+# ---------------------------------------------------------------- validation
+@pytest.mark.parametrize("bodies, match", [
+    ([], "non-empty"),
+    ([{"name": "a", "shape": {"type": "sphere", "radius": 1}, "colour": 1}], "unknown key"),
+    ([{"name": "a", "shape": {"type": "sphere", "radius": 1}},
+      {"name": "a", "shape": {"type": "sphere", "radius": 1}}], "duplicate name"),
+    ([{"name": "a", "shape": {"type": "sphere", "radius": -1}}], "body 'a'.*radius"),
+    ([{"name": "a", "shape": {"type": "blob"}}], "unknown shape type"),
+    ([{"name": "", "shape": {"type": "sphere", "radius": 1}}], "name"),
+    ([{"name": "a", "shape": {"type": "sphere", "radius": 1}, "group": -1}], "group"),
+    ([{"name": "a", "shape": {"type": "sphere", "radius": 1}, "static": "yes"}], "static"),
+    ([{"name": "a"}], "missing 'shape'"),
+])
+def test_bad_bodies_raise(bodies, match):
+    with pytest.raises(ValueError, match=match):
+        Pipeline(bodies)
+
+
+def test_bad_config_raises():
+    bodies = [{"name": "a", "shape": {"type": "sphere", "radius": 1}}]
+    with pytest.raises(ValueError, match="unknown key"):
+        PipelineConfig.from_dict({"methd": "auto"})
+    for kw, match in [({"method": "sat"}, "method"), ({"proximity": -1.0}, "proximity"),
+                      ({"merge_distance": 0.0}, "merge_distance"),
+                      ({"drift_threshold": float("nan")}, "drift_threshold"),
+                      ({"max_contacts": 0}, "max_contacts"), ({"stale_steps": 1.5}, "stale"),
+                      ({"allowed_pairs": [["a"]]}, "allowed_pairs"),
+                      ({"allowed_pairs": [["a", "zz"]]}, "zz")]:
+        with pytest.raises(ValueError, match=match):
+            Pipeline(bodies, PipelineConfig(**kw))
+    assert PipelineConfig.from_dict({"method": "mpr"}).method == "mpr"
+
+
+def test_bad_poses_raise_naming_the_body():
+    p = Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1}},
+                  {"name": "b", "shape": {"type": "sphere", "radius": 1}}])
+    pos = np.zeros((2, 3))
+    quat = np.array([ID, ID])
+    bad = pos.copy()
+    bad[1, 2] = np.nan
+    with pytest.raises(ValueError, match=r"body 1 \('b'\): non-finite position"):
+        p.step(bad, quat, 0.0)
+    q = quat.copy()
+    q[0] = 0.0
+    with pytest.raises(ValueError, match=r"body 0 \('a'\): zero quaternion"):
+        p.step(pos, q, 0.0)
+    q[0] = [np.inf, 0, 0, 1]
+    with pytest.raises(ValueError, match="body 0.*non-finite quaternion"):
+        p.step(pos, q, 0.0)
+    with pytest.raises(ValueError, match=r"\(2, 3\)"):
+        p.step(np.zeros((3, 3)), quat, 0.0)
+    # unnormalised quaternions are accepted; results are finite
+    r = p.step(pos + [[0, 0, 0], [1.5, 0, 0]], quat * 7.0, 0.0)
+    assert isinstance(r, StepResult) and len(r.contact_id) == 1
+    assert np.all(np.isfinite(r.position)) and np.all(np.isfinite(r.normal))
+
+
+# ---------------------------------------------------------------- filter rules
+def test_filter_rules():
+    rng = np.random.default_rng(1)
+    n = 24
+    bodies = []
+    for i in range(n):
+        bodies.append({"name": f"b{i}", "shape": {"type": "sphere", "radius": 1.0},
+                       "static": bool(i % 5 == 0), "group": int(rng.integers(1, 8)),
+                       "mask": int(rng.integers(0, 8))})
+    allowed = [["b1", "b2"], ["b7", "b3"], ["b10", "b11"]]
+    p = Pipeline(bodies, PipelineConfig(allowed_pairs=allowed))
+    pos = rng.normal(scale=0.2, size=(n, 3))                 # everything overlaps
+    r = p.step(pos, np.tile(ID, (n, 1)), 0.0)
+    assert r.n_candidate_pairs == n * (n - 1) // 2
+    acm = {(1, 2), (3, 7), (10, 11)}
+    want = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            bi, bj = bodies[i], bodies[j]
+            if bi["static"] and bj["static"]:
+                continue
+            if not (bi["group"] & bj["mask"] and bj["group"] & bi["mask"]):
+                continue
+            if (i, j) in acm:
+                continue
+            want.append((i, j))
+    assert 0 < len(want) < n * (n - 1) // 2 - 10       # the rules actually removed pairs
+    assert r.n_narrowphase_pairs == len(want)
+    assert [tuple(x) for x in r.pairs.tolist()] == want
+    assert set(zip(r.body_a.tolist(), r.body_b.tolist())) == set(want)
+
+
+def test_proximity_makes_candidates_not_contacts():
+    bodies = [{"name": "a", "shape": {"type": "sphere", "radius": 0.5}},
+              {"name": "b", "shape": {"type": "sphere", "radius": 0.5}}]
+    pos = np.array([[0.0, 0, 0], [1.05, 0, 0]])
+    quat = np.array([ID, ID])
+    assert Pipeline(bodies).step(pos, quat).n_candidate_pairs == 0
+    r = Pipeline(bodies, PipelineConfig(proximity=0.1)).step(pos, quat)
+    assert r.n_candidate_pairs == 1 and len(r.contact_id) == 0 and len(r.pairs) == 0
+
+
+# ---------------------------------------------------------------- manifolds
+def box_on_plane(size=(1.0, 0.6, 0.4)):
+    return Pipeline([PLANE, {"name": "box", "shape": {"type": "box", "size": list(size)}}])
+
+
+def test_box_resting_has_four_contacts_from_the_first_step():
+    p = box_on_plane()
+    pos = np.array([[0, 0, 0], [0.3, -0.2, 0.2 - 1e-4]])
+    quat = np.array([ID, quat_axis([0, 0, 1], 0.3)])
+    r = p.step(pos, quat, 0.0)
+    assert len(r.contact_id) == 4
+    assert np.allclose(r.normal, [0, 0, 1])
+    assert np.allclose(r.depth, 1e-4, atol=1e-9)
+    assert np.allclose(r.point_a[:, 2], 0.0, atol=1e-12)          # on the plane
+    corners = np.array([[sx * 0.5, sy * 0.3, -0.2] for sx in (-1, 1) for sy in (-1, 1)])
+    corners_w = corners @ rotm(quat[1]).T + pos[1]
+    for c in corners_w:                                             # on the box corners
+        assert np.min(np.linalg.norm(r.point_b - c, axis=1)) < 1e-9
+    assert set(r.status.tolist()) == {ST_PENETRATING}
+
+
+@pytest.mark.parametrize("rock", [0.0, 0.004])
+def test_box_still_or_rocking_keeps_stable_four_point_manifold(rock):
+    p = box_on_plane()
+    ids0 = None
+    for k in range(300):
+        tilt = rock * math.sin(0.1 * k)                      # radians, ~0.23 deg
+        q = quat_axis([1, 0, 0], tilt)
+        # lowest corner 1e-4 below the plane
+        low = 0.3 * abs(math.sin(tilt)) + 0.2 * math.cos(tilt)
+        pos = np.array([[0, 0, 0], [0.0, 0.0, low - 1e-4]])
+        r = p.step(pos, np.array([ID, q]), 0.01 * k)
+        assert len(r.contact_id) == 4, k
+        if ids0 is None:
+            ids0 = r.contact_id.copy()
+        assert np.array_equal(r.contact_id, ids0), k
+        assert np.all(r.age == k)
+        assert r.depth.max() == pytest.approx(1e-4, abs=1e-9)
+        assert np.all(r.depth >= 0.0)
+    assert ids0.tolist() == [0, 1, 2, 3]
+
+
+def test_sphere_rolling_keeps_one_contact_with_one_id():
+    radius = 0.5
+    p = Pipeline([PLANE, {"name": "ball", "shape": {"type": "sphere", "radius": radius}}])
+    q = np.array(ID)
+    first = None
+    for k in range(400):
+        x = 0.004 * k
+        q = quat_mul(quat_axis([0, 1, 0], 0.004 / radius), q) if k else q
+        pos = np.array([[0, 0, 0], [x, 0.1 * math.sin(0.01 * k), radius - 1e-5]])
+        r = p.step(pos, np.array([ID, q]), 0.01 * k)
+        assert len(r.contact_id) == 1, k
+        if first is None:
+            first = int(r.contact_id[0])
+        assert r.contact_id[0] == first and r.age[0] == k
+        assert np.allclose(r.position[0, :2], pos[1, :2], atol=1e-9)
+        assert r.depth[0] == pytest.approx(1e-5, abs=1e-10)
+    assert x > 1.0                                               # it really travelled
+
+
+def test_stacked_boxes_and_lying_shapes():
+    bodies = [PLANE,
+              {"name": "base", "shape": {"type": "box", "size": [1, 1, 1]}},
+              {"name": "top", "shape": {"type": "box", "size": [0.4, 0.4, 0.4]}},
+              {"name": "cap", "shape": {"type": "capsule", "radius": 0.1, "length": 0.6}},
+              {"name": "can", "shape": {"type": "cylinder", "radius": 0.2, "height": 0.3}}]
+    p = Pipeline(bodies)
+    pos = np.array([[0, 0, 0], [0, 0, 0.5 - 1e-4], [0.1, 0.2, 1.2 - 2e-4],
+                    [3, 0, 0.1 - 1e-4], [-3, 0, 0.15 - 1e-4]])
+    quat = np.array([ID, ID, quat_axis([0, 0, 1], 0.7), quat_axis([1, 0, 0], math.pi / 2), ID])
+    r = p.step(pos, quat, 0.0)
+    count = {tuple(x): int(np.sum((r.body_a == x[0]) & (r.body_b == x[1]))) for x in r.pairs}
+    assert count == {(0, 1): 4, (0, 3): 2, (0, 4): 4, (1, 2): 4}
+    top = (r.body_a == 1) & (r.body_b == 2)
+    assert np.allclose(r.normal[top], [0, 0, 1])
+    assert np.allclose(r.depth[top], 1e-4, atol=1e-9)
+    assert np.allclose(r.point_a[top][:, 2], 1.0 - 1e-4)
+    # contacts lie on the shapes: B moved by depth along the normal touches
+    assert np.allclose(r.point_b - r.point_a, -r.depth[:, None] * r.normal, atol=1e-9)
+
+
+# ---------------------------------------------------------------- events
+def test_events_two_spheres_approach_touch_separate():
+    p = Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 0.5}},
+                  {"name": "b", "shape": {"type": "sphere", "radius": 0.5}}])
+    xs = [1.3, 1.1, 0.999, 0.995, 0.99, 0.995, 0.999, 1.05, 1.2]
+    log = []
+    for k, x in enumerate(xs):
+        r = p.step(np.array([[0, 0, 0], [x, 0, 0]]), np.array([ID, ID]), 0.1 * k)
+        log.append(r.events)
+    assert log[0] == [] and log[1] == []
+    assert log[2] == [("began", 0, 1, -1), ("began", 0, 1, 0)]
+    for k in range(3, 7):
+        assert log[k] == [("persisted", 0, 1, -1), ("persisted", 0, 1, 0)], k
+    assert log[7] == [("ended", 0, 1, -1), ("ended", 0, 1, 0)]
+    assert log[8] == []
+
+
+# ---------------------------------------------------------------- determinism
+def pile(n, seed):
+    rng = np.random.default_rng(seed)
+    kinds = [{"type": "sphere", "radius": 0.3}, {"type": "box", "size": [0.5, 0.4, 0.3]},
+             {"type": "capsule", "radius": 0.15, "length": 0.4},
+             {"type": "cylinder", "radius": 0.2, "height": 0.4},
+             {"type": "convex", "points": (rng.normal(size=(8, 3)) * 0.25).tolist()}]
+    bodies = [PLANE] + [{"name": f"b{i}", "shape": kinds[i % len(kinds)]} for i in range(n)]
+    side = n ** (1 / 3) * 0.6
+    pos = np.concatenate([[[0, 0, 0]], rng.uniform([-side, -side, 0], [side, side, side],
+                                                   size=(n, 3))])
+    quat = rng.normal(size=(n + 1, 4))
+    quat[0] = ID
+    return bodies, pos, quat
+
+
+def run_pile(threads, parallel_min, n=150, steps=3):
+    bodies, pos, quat = pile(n, 5)
+    numba.set_num_threads(threads)
+    p = Pipeline(bodies, PipelineConfig(max_contacts=3))
+    p.parallel_min_items = parallel_min
+    rng = np.random.default_rng(9)
+    out = []
+    for k in range(steps):
+        pos = pos + rng.normal(scale=0.01, size=pos.shape) * (np.arange(len(pos)) > 0)[:, None]
+        out.append(p.step(pos, quat, float(k)))
+    return out
+
+
+def test_deterministic_with_one_or_two_threads():
+    before = numba.get_num_threads()
+    try:
+        one = run_pile(1, parallel_min=0)            # force the threaded kernels
+        two = run_pile(min(2, numba.config.NUMBA_NUM_THREADS), parallel_min=0)
+        ser = run_pile(1, parallel_min=10 ** 9)
+    finally:
+        numba.set_num_threads(before)
+    assert sum(len(r.contact_id) for r in one) > 50          # a real pile
+    assert max(r.contact_id.max() for r in one) > 0
+    for a, b in zip(one, two):
+        for f in ("pairs", "body_a", "body_b", "position", "point_a", "point_b", "normal",
+                  "depth", "contact_id", "age", "method", "status"):
+            assert np.array_equal(getattr(a, f), getattr(b, f)), f
+        assert a.events == b.events
+        assert a.n_candidate_pairs == b.n_candidate_pairs
+        assert np.all(np.isfinite(a.position)) and np.all(a.depth >= 0)
+        assert set(a.status.tolist()) <= {ST_TOUCHING, ST_PENETRATING}
+        assert sorted(a.timings) == sorted(["bounds", "broadphase", "filter", "narrowphase",
+                                            "manifold", "arbiters"])
+    # one thread for short batches runs the same compiled kernels: identical numbers
+    for a, b in zip(one, ser):
+        for f in ("pairs", "position", "point_a", "point_b", "normal", "depth", "contact_id"):
+            assert np.array_equal(getattr(a, f), getattr(b, f)), f
+        assert a.events == b.events
+
+
+def test_warm_up_leaves_state_alone():
+    p = box_on_plane()
+    p.warm_up()
+    r = p.step(np.array([[0, 0, 0], [0, 0, 0.2 - 1e-4]]), np.array([ID, ID]), 0.0)
+    assert r.contact_id.tolist() == [0, 1, 2, 3]
+
+
+def test_clipping_large_face_on_small_face_and_tilted_boxes():
+    cube = [[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)]
+    bodies = [PLANE,
+              {"name": "small", "shape": {"type": "box", "size": [0.4, 0.4, 0.4]}},
+              {"name": "large", "shape": {"type": "box", "size": [1.0, 1.0, 0.2]}},
+              {"name": "edge", "shape": {"type": "box", "size": [0.5, 0.5, 0.5]}},
+              {"name": "corner", "shape": {"type": "box", "size": [0.5, 0.5, 0.5]}},
+              {"name": "hull", "shape": {"type": "convex", "points": cube}}]
+    p = Pipeline(bodies)
+    edge_q = quat_axis([1, 0, 0], 0.5)
+    corner_q = quat_mul(quat_axis([1, 0, 0], 0.6), quat_axis([0, 1, 0], 0.5))
+
+    def rest_height(q, half):
+        r = rotm(q)
+        corners = np.array([[x, y, z] for x in (-half, half) for y in (-half, half)
+                            for z in (-half, half)]) @ r.T
+        return -corners[:, 2].min()
+
+    pos = np.array([[0, 0, 0], [0, 0, 0.2 - 1e-4], [0.02, -0.03, 0.4 + 0.1 - 2e-4],
+                    [3, 0, rest_height(edge_q, 0.25) - 1e-4],
+                    [6, 0, rest_height(corner_q, 0.25) - 1e-4], [-3, 0, 0.5 - 1e-4]])
+    quat = np.array([ID, ID, quat_axis([0, 0, 1], math.pi / 4), edge_q, corner_q, ID])
+    r = p.step(pos, quat, 0.0)
+    count = {tuple(x): int(np.sum((r.body_a == x[0]) & (r.body_b == x[1]))) for x in r.pairs}
+    assert count == {(0, 1): 4, (0, 3): 2, (0, 4): 1, (0, 5): 4, (1, 2): 4}
+    # the large rotated face clipped by the small one: the small face's corners
+    k = (r.body_a == 1) & (r.body_b == 2)
+    want = np.array([[sx * 0.2, sy * 0.2, 0.4 - 1e-4] for sx in (-1, 1) for sy in (-1, 1)])
+    for w in want:
+        assert np.min(np.linalg.norm(r.point_a[k] - w, axis=1)) < 1e-9
+    assert np.allclose(r.depth[k], 1e-4, atol=1e-9)
+    # edge and corner contacts sit on the plane, under the lowest box points
+    for b in (3, 4):
+        k = (r.body_a == 0) & (r.body_b == b)
+        assert np.allclose(r.point_a[k][:, 2], 0.0) and np.allclose(r.depth[k], 1e-4)

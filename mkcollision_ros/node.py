@@ -47,7 +47,8 @@ PARAMETERS = (
     ("rate_hz", 30.0, "collision steps per second (> 0)"),
     ("method", "auto", "narrow-phase method: auto | gjk_epa | mpr"),
     ("proximity", 0.0, "m; bounding boxes are grown by this (>= 0)"),
-    ("merge_distance", 0.02, "m; a new contact this close to a stored one updates it"),
+    ("merge_distance", 0.02, "m (> 0); a new contact this close to a stored one updates it"),
+    ("drift_threshold", 0.01, "m (> 0); a stored contact whose points drift this far is dropped"),
     ("max_contacts", 4, "contacts kept per touching pair (>= 1)"),
     ("stale_steps", 3, "steps an unconfirmed pair is kept (>= 1)"),
     ("publish_markers", True, "publish the MarkerArray"),
@@ -87,7 +88,8 @@ class CollisionNode(Node):
         self.pipeline = Pipeline([{k: v for k, v in b.items() if k != "pose"}
                                   for b in self.bodies], config=PipelineConfig(
             method=self.cfg["method"], proximity=self.cfg["proximity"],
-            merge_distance=self.cfg["merge_distance"], max_contacts=self.cfg["max_contacts"],
+            merge_distance=self.cfg["merge_distance"],
+            drift_threshold=self.cfg["drift_threshold"], max_contacts=self.cfg["max_contacts"],
             stale_steps=self.cfg["stale_steps"]))
         t0 = time.perf_counter()
         self.pipeline.warm_up()
@@ -123,7 +125,8 @@ class CollisionNode(Node):
             cfg[name] = value
         checks = (
             ("rate_hz", cfg["rate_hz"] > 0.0), ("proximity", cfg["proximity"] >= 0.0),
-            ("merge_distance", cfg["merge_distance"] >= 0.0),
+            ("merge_distance", cfg["merge_distance"] > 0.0),
+            ("drift_threshold", cfg["drift_threshold"] > 0.0),
             ("max_contacts", cfg["max_contacts"] >= 1), ("stale_steps", cfg["stale_steps"] >= 1),
             ("marker_normal_length", cfg["marker_normal_length"] >= 0.0),
             ("max_marker_arrows", cfg["max_marker_arrows"] >= 0),

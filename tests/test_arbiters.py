@@ -119,3 +119,70 @@ def test_separation_ends_immediately_and_ids_are_never_reused():
     assert s.update(pos, IDENT, {}, set()) == []
     ev = s.update(pos, IDENT, touching([[0, 0, 0]]), set())
     assert ev == [("began", 0, 1, -1), ("began", 0, 1, 1)]
+
+
+def test_random_sequences_keep_event_invariants():
+    """Seeded random pairs, contacts and poses over many steps: every contact id begins
+    once, then persists, then ends at most once; the listed contacts are exactly the
+    began + persisted ones; at most max_contacts per pair; pair events agree."""
+    rng = np.random.default_rng(11)
+    n = 6
+    s = ArbiterSet(merge_distance=0.05, drift_threshold=0.03, max_contacts=3, stale_steps=2)
+    pos = rng.normal(size=(n, 3))
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    state = {}                          # contact id -> "alive" / "dead"
+    pair_alive = set()
+    n_began = 0
+    for step in range(300):
+        pos = pos + rng.normal(scale=0.01, size=pos.shape)
+        quat = quat + rng.normal(scale=0.01, size=quat.shape)
+        quat /= np.linalg.norm(quat, axis=1)[:, None]
+        touching, unconfirmed = {}, set()
+        for a in range(n):
+            for b in range(a + 1, n):
+                u = rng.random()
+                if u < 0.35:
+                    m = int(rng.integers(1, 7))
+                    base = 0.5 * (pos[a] + pos[b])
+                    pa = base + rng.normal(scale=0.05, size=(m, 3))
+                    nrm = rng.normal(size=3)
+                    nrm /= np.linalg.norm(nrm)
+                    pb = pa - rng.uniform(0, 0.01, size=(m, 1)) * nrm
+                    touching[(a, b)] = (pa, pb, nrm)
+                elif u < 0.45:
+                    unconfirmed.add((a, b))
+        ev = s.update(pos, quat, touching, unconfirmed)
+        c = s.contacts()
+        listed = set(c["contact_id"].tolist())
+        assert len(listed) == len(c["contact_id"])
+        seen_now = set()
+        for kind, a, b, cid in ev:
+            assert a < b
+            if cid < 0:
+                if kind == "began":
+                    assert (a, b) not in pair_alive
+                    pair_alive.add((a, b))
+                elif kind == "ended":
+                    pair_alive.remove((a, b))
+                else:
+                    assert (a, b) in pair_alive
+                continue
+            if kind == "began":
+                assert cid not in state
+                state[cid] = "alive"
+                n_began += 1
+            else:
+                assert state.get(cid) == "alive", (kind, cid)
+                if kind == "ended":
+                    state[cid] = "dead"
+            if kind != "ended":
+                seen_now.add(cid)
+        assert seen_now == listed
+        assert set(map(tuple, s.pairs().tolist())) == pair_alive
+        for key in pair_alive:
+            k = (c["body_a"] == key[0]) & (c["body_b"] == key[1])
+            assert 1 <= k.sum() <= 3 or key in unconfirmed
+        assert set(pair_alive) <= set(touching) | unconfirmed
+        assert np.all(c["depth"] >= 0) and np.all(np.isfinite(c["point_a"]))
+    assert n_began > 200 and "dead" in state.values()
+    assert sorted(state) == list(range(len(state)))       # ids: 0, 1, 2, ... no gaps

@@ -25,7 +25,13 @@ world frame).  This module turns face-on-face contacts into the full manifold:
      plane is <= ``keep_dist`` (m) are contacts: the point on the incident body and its
      projection on the reference face.  No point left: the narrow phase's one point.
 
-Output per pair (fixed slots, thread-count independent): up to MAX_MANIFOLD contacts
+Persistence (``persist_batch``, the arbiters' kernel, serial so ids are deterministic):
+stored contacts are refreshed from the bodies' frames and dropped past the drift
+threshold, matched to the new manifold by distance, reduced to ``max_contacts``
+(deepest, farthest, then largest hull area: Bullet's ``sortCachedPoints``, Jolt's
+``PruneContactPoints``), and the surviving new ones get ids; see arbiters.py.
+
+Output per pair of ``manifold_batch`` (fixed slots, thread-count independent): up to MAX_MANIFOLD contacts
 ``cpts[k, c] = (point_a (3,), point_b (3,), distance)`` in the world frame (m), with
 ``point_b - point_a = distance * normal`` and distance < 0 penetrating, the normal
 ``cnormal[k]`` (unit, A to B) and the count ``ccount[k]`` (0 when the pair does not

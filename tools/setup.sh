@@ -53,6 +53,7 @@ src_hash="$(cat package.xml setup.py setup.cfg interfaces/mkcollision_msgs/packa
   interfaces/mkcollision_msgs/srv/* config/*.yaml | sha256sum | cut -d' ' -f1)"
 if [ "$(cat install/.mkcollision-src 2>/dev/null)" != "$src_hash" ]; then
   log "building with colcon"
+  mkdir -p log
   (
     export VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH"
     export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV"

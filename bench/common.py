@@ -143,7 +143,6 @@ def touching_pairs(table, pos, quat):
     """Exact touching pairs (i < j) by brute-force bounding-sphere culling plus our
     M_AUTO kernel; used only to calibrate scene density."""
     r = table.params[:, 7]
-    from mkcollision_ros.kernels.broadphase import find_pairs  # noqa: F401 (warms nothing)
     cand = []
     order = np.argsort(pos[:, 0])
     xs = pos[order, 0]

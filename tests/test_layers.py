@@ -7,6 +7,8 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 KERNEL_OK = {"numpy", "numba", "math", "__future__"}
+# jit.py alone may use the standard library to place numba's cache (see its docstring)
+JIT_EXTRA = {"os", "hashlib"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
 ROS_MODULES = {"node.py", "demo.py"}
@@ -24,8 +26,9 @@ def imports(path):
 
 def test_kernels_import_only_numpy_numba_math():
     for path in sorted((ROOT / "mkcollision_ros" / "kernels").glob("*.py")):
+        allowed = KERNEL_OK | (JIT_EXTRA if path.name == "jit.py" else set())
         for module, line in imports(path):
-            assert module in KERNEL_OK, f"{path.name}:{line} imports {module}"
+            assert module in allowed, f"{path.name}:{line} imports {module}"
 
 
 def test_core_library_is_free_of_ros_and_peers():

@@ -40,6 +40,9 @@ def test_installed_executable_and_config_are_where_ros2_run_looks():
     assert os.access(exe, os.X_OK)
     cfg = default_params_file()
     assert cfg.endswith(os.path.join("share", "mkcollision_ros", "config", "collision_node.yaml"))
+    # the ament index marker `ros2 pkg list` reads
+    from ament_index_python import get_resource
+    assert get_resource("packages", "mkcollision_ros") is not None
 
 
 def test_executable_with_config_file_answers_poses():

@@ -1,0 +1,83 @@
+"""msg_adapters: struct-of-arrays layouts, zero-copy reads, round trips, length checks."""
+import numpy as np
+import pytest
+from ros_harness import RosHarness  # noqa: F401,I001  (sets ROS_DOMAIN_ID before rclpy)
+
+from mkcollision_msgs.msg import BodyPoseArray
+from rclpy.serialization import deserialize_message, serialize_message
+
+import msg_adapters
+from msg_adapters.poses import arrays_to_pose_array
+from mkcollision_ros.results import ContactSet
+
+
+def contacts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    pa = rng.normal(size=(n, 3))
+    normal = rng.normal(size=(n, 3))
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    depth = rng.uniform(0, 0.1, n)
+    pb = pa - depth[:, None] * normal
+    return ContactSet(names=["a", "b", "c"], body_a=np.zeros(n, np.int64),
+                      body_b=rng.integers(1, 3, n), position=0.5 * (pa + pb), point_a=pa,
+                      point_b=pb, normal=normal, depth=depth,
+                      contact_id=rng.integers(1, 2 ** 40, n), age=rng.integers(0, 99, n),
+                      method=np.full(n, 1), status=np.full(n, 2))
+
+
+def test_body_pose_array_round_trip_through_cdr_is_exact():
+    rng = np.random.default_rng(1)
+    names = [f"b{i}" for i in range(1000)]
+    pos, quat = rng.normal(size=(1000, 3)), rng.normal(size=(1000, 4))
+    msg = msg_adapters.arrays_to_body_pose_array(names, pos, quat, frame_id="map")
+    back = deserialize_message(serialize_message(msg), BodyPoseArray)
+    n2, p2, q2 = msg_adapters.body_pose_array_to_arrays(back)
+    assert n2 == names and back.header.frame_id == "map"
+    assert np.array_equal(p2, pos) and np.array_equal(q2, quat)
+    assert not p2.flags.writeable          # views of the message: copy before mutating
+
+
+@pytest.mark.parametrize("n_pos, n_quat", [(5, 8), (6, 7), (0, 0)])
+def test_body_pose_array_length_contract(n_pos, n_quat):
+    msg = BodyPoseArray(names=["a", "b"])
+    msg.positions = [0.0] * n_pos
+    msg.orientations = [0.0] * n_quat
+    with pytest.raises(ValueError, match="needs 6 positions and 8 orientation"):
+        msg_adapters.body_pose_array_to_arrays(msg)
+
+
+def test_pose_array_order_is_kept():
+    pos = np.arange(12.0).reshape(4, 3)
+    quat = np.tile([0.0, 0.0, 0.6, 0.8], (4, 1))
+    p2, q2 = msg_adapters.pose_array_to_arrays(arrays_to_pose_array(pos, quat))
+    assert np.array_equal(p2, pos) and np.array_equal(q2, quat)
+
+
+def test_contact_array_and_contact_list_carry_every_field():
+    c = contacts(7)
+    msg = msg_adapters.contacts_to_contact_array(c, frame_id="world")
+    back = msg_adapters.contact_array_to_arrays(msg)
+    assert back["body_a"] == ["a"] * 7
+    assert back["body_b"] == [c.names[i] for i in c.body_b]
+    for key in ("position", "point_a", "point_b", "normal", "depth"):
+        assert np.array_equal(back[key], getattr(c, key)), key
+    assert back["contact_id"].tolist() == c.contact_id.tolist()
+    assert back["age"].tolist() == c.age.tolist()
+    items = msg_adapters.contacts_to_contact_list(c)
+    assert [x.id for x in items] == c.contact_id.tolist()
+    for x, d in zip(items, c.depth):
+        assert x.signed_distance == pytest.approx(-d, abs=1e-12)
+        assert x.status == x.STATUS_PENETRATING and x.method == x.METHOD_GJK_EPA
+
+
+def test_markers_points_arrows_and_cap():
+    c = contacts(10)
+    out = msg_adapters.contacts_to_marker_array(c, normal_length=0.5, max_arrows=4).markers
+    assert out[0].action == out[0].DELETEALL
+    assert out[1].type == out[1].SPHERE_LIST and len(out[1].points) == 10
+    arrows = out[2:]
+    assert len(arrows) == 4 and all(m.type == m.ARROW for m in arrows)
+    tip = arrows[0].points[1]
+    expected = c.position[0] + 0.5 * c.normal[0]
+    assert (tip.x, tip.y, tip.z) == pytest.approx(tuple(expected))
+    assert len({m.id for m in out[1:]}) == len(out) - 1

@@ -24,25 +24,79 @@ The arbiter of a pair is created when the pair starts touching (``began`` pair e
 and removed when it separates (``ended``) or was not confirmed (narrow phase failed or
 did not run) for ``stale_steps`` steps.
 
-Events are tuples ``(kind, body_a, body_b, contact_id)`` with ``kind`` one of
-``"began"``, ``"persisted"``, ``"ended"``; ``contact_id`` is -1 for pair events.  They
-are ordered by pair, the pair's event first, then its contacts' by id.  All vectors are
-float64 in metres; depth >= 0 (m), distance = -depth when penetrating.
+Events are an ``Events`` object: arrays ``kind`` (EV_BEGAN 0 / EV_PERSISTED 1 /
+EV_ENDED 2), ``body_a``, ``body_b``, ``contact_id`` (-1 for pair events), ordered by
+pair, the pair's event first, then its contacts' by id.  Iterating it (or ``tolist()``)
+gives tuples ``(kind, body_a, body_b, contact_id)`` with ``kind`` one of ``"began"``,
+``"persisted"``, ``"ended"``, and it compares equal to a list of such tuples.  All
+vectors are float64 in metres; depth >= 0 (m), distance = -depth when penetrating.
 
-The pair bookkeeping is numpy over sorted pair keys ``a * n_bodies + b``; the contact
-work runs in one serial numba kernel (``kernels.manifold.persist_batch``), so a step
-with thousands of touching pairs costs milliseconds, not a Python loop per pair.
+The whole step - merging the previous arbiters with this step's touching and undecided
+pairs (a sorted-key merge), matching, drift, reduction, ids, events and the compacted
+new state - is one serial numba kernel (``kernels.manifold.arbiter_step``), so a step
+costs microseconds for a few pairs and ~1 us per touching pair, with no Python loop.
 """
 import numpy as np
 
+from .kernels.constants import ST_NOT_RUN
 from .kernels.manifold import (EV_BEGAN, EV_ENDED, EV_PERSISTED, MAX_MANIFOLD,
-                               persist_batch)
+                               arbiter_step)
 
 BEGAN = "began"
 PERSISTED = "persisted"
 ENDED = "ended"
-_KIND_NAMES = np.array([BEGAN, PERSISTED, ENDED], dtype=object)
+KIND_NAMES = np.array([BEGAN, PERSISTED, ENDED], dtype=object)
 assert (EV_BEGAN, EV_PERSISTED, EV_ENDED) == (0, 1, 2)
+
+
+class Events:
+    """Events of one step, as arrays (E,): ``kind`` int64 (EV_BEGAN / EV_PERSISTED /
+    EV_ENDED; ``KIND_NAMES[kind]`` are the names), ``body_a``, ``body_b`` int64 (a < b),
+    ``contact_id`` int64 (-1 for the pair's own event).  Ordered by pair, the pair's
+    event first, then its contacts' by id.  ``tolist()``, iteration and indexing give
+    tuples ``(kind name, body_a, body_b, contact_id)`` of Python values; ``==`` compares
+    with another Events or a list of such tuples."""
+
+    __slots__ = ("kind", "body_a", "body_b", "contact_id")
+    __hash__ = None
+
+    def __init__(self, kind, body_a, body_b, contact_id):
+        self.kind = kind
+        self.body_a = body_a
+        self.body_b = body_b
+        self.contact_id = contact_id
+
+    @classmethod
+    def empty(cls):
+        z = np.zeros(0, np.int64)
+        return cls(z, z, z, z)
+
+    def tolist(self):
+        return list(zip(KIND_NAMES[self.kind].tolist(), self.body_a.tolist(),
+                        self.body_b.tolist(), self.contact_id.tolist()))
+
+    def __len__(self):
+        return len(self.kind)
+
+    def __iter__(self):
+        return iter(self.tolist())
+
+    def __getitem__(self, i):
+        return self.tolist()[i]
+
+    def __contains__(self, item):
+        return item in self.tolist()
+
+    def __eq__(self, other):
+        if isinstance(other, Events):
+            return all(np.array_equal(getattr(self, f), getattr(other, f))
+                       for f in self.__slots__)
+        if isinstance(other, (list, tuple)):
+            return self.tolist() == list(other)
+        return NotImplemented
+
+    def __repr__(self):
+        return f"Events({self.tolist()!r})"
 
 
 def quat_matrices(quat_xyzw):
@@ -68,9 +122,10 @@ class ArbiterSet:
     stale_steps >= 1.
 
     State (read-only outside this class), arbiters sorted by key = a * n_bodies + b:
-      keys int64 (A,), unconfirmed int64 (A,): steps in a row without confirmation;
-      contacts sorted by (key, id): c_key, c_id, c_age int64 (C,), c_la, c_lb float64
-      (C, 3) points in A's / B's body frame (m), c_na float64 (C, 3) normal in A's frame.
+      keys int64 (A,), unconfirmed int64 (A,): steps in a row without confirmation,
+      start int64 (A + 1,): arbiter k's contacts are rows [start[k], start[k + 1]);
+      contacts sorted by (key, id): c_id, c_age int64 (C,), c_la, c_lb float64 (C, 3)
+      points in A's / B's body frame (m), c_na float64 (C, 3) normal in A's frame.
     """
 
     def __init__(self, merge_distance, drift_threshold, max_contacts, stale_steps,
@@ -81,27 +136,25 @@ class ArbiterSet:
         self.stale_steps = int(stale_steps)
         self.n_bodies = n_bodies
         self.next_id = 0
-        self.keys = np.zeros(0, np.int64)
-        self.unconfirmed = np.zeros(0, np.int64)
-        self.c_key = np.zeros(0, np.int64)
-        self.c_id = np.zeros(0, np.int64)
-        self.c_age = np.zeros(0, np.int64)
-        self.c_la = np.zeros((0, 3))
-        self.c_lb = np.zeros((0, 3))
-        self.c_na = np.zeros((0, 3))
+        z = np.zeros(0, np.int64)
+        self.keys = z
+        self.unconfirmed = z
+        self.start = np.zeros(1, np.int64)
+        self._pairs = np.zeros((0, 2), np.int64)
+        self.c_id = z
+        self.c_age = z
+        self.c_la = self.c_lb = self.c_na = np.zeros((0, 3))
+        self._con = {"body_a": z, "body_b": z, "contact_id": z, "age": z,
+                     "point_a": np.zeros((0, 3)), "point_b": np.zeros((0, 3)),
+                     "normal": np.zeros((0, 3)), "depth": np.zeros(0),
+                     "status": z, "method": z}
 
     def __len__(self):
         return len(self.keys)
 
     def pairs(self):
         """Pairs with an arbiter, int64 (A, 2), a < b, sorted."""
-        n = self._n()
-        return np.stack([self.keys // n, self.keys % n], axis=1).astype(np.int64)
-
-    def _n(self):
-        if self.n_bodies is None:
-            raise ValueError("ArbiterSet needs n_bodies (or a first update)")
-        return self.n_bodies
+        return self._pairs
 
     # ------------------------------------------------------------------------------
     def update(self, pos_w, quat_w, touching, unconfirmed):
@@ -113,7 +166,7 @@ class ArbiterSet:
         unconfirmed: set of pairs (a, b) the narrow phase could not decide (failed or not
             run); their arbiters are kept for ``stale_steps`` steps.
         Every other existing arbiter has separated and ends.
-        Returns the events, a list of (kind, a, b, contact_id).
+        Returns the Events.
         """
         if self.n_bodies is None:
             self.n_bodies = len(pos_w)
@@ -132,108 +185,80 @@ class ArbiterSet:
             ccount[r] = m
         tkeys = np.array([a * n + b for a, b in tk], np.int64)
         ukeys = np.array(sorted(a * n + b for a, b in unconfirmed), np.int64)
-        return self.update_arrays(pos_w, quat_w, tkeys, cpts, cnormal, ccount, ukeys)
+        return self.update_arrays(np.ascontiguousarray(pos_w, np.float64),
+                                  np.ascontiguousarray(quat_w, np.float64),
+                                  tkeys, cpts, cnormal, ccount, ukeys)
 
-    def update_arrays(self, pos_w, quat_w, tkeys, cpts, cnormal, ccount, ukeys):
+    def update_arrays(self, pos_w, quat_w, tkeys, cpts, cnormal, ccount, ukeys,
+                      t_status=None, t_method=None, u_status=None, u_method=None):
         """Advance one step (array form).
 
+        pos_w float64 (N, 3), quat_w float64 (N, 4) unit xyzw, both C-contiguous.
         tkeys int64 (T,) sorted keys a * n_bodies + b of the touching pairs, with their
-        manifolds cpts float64 (T, MAX_MANIFOLD, 7), cnormal (T, 3), ccount int64 (T,)
-        (see kernels.manifold.manifold_batch); ukeys int64 (U,) sorted keys of the pairs
-        the narrow phase could not decide.  Returns the events (see ``update``).
+        manifolds in the first T rows of cpts float64 (>= T, MAX_MANIFOLD, 7), cnormal
+        (>= T, 3), ccount int64 (>= T,) (see kernels.manifold.manifold_batch); ukeys
+        int64 (U,) sorted keys of the pairs the narrow phase could not decide.
+        t_status, t_method int64 (T,), u_status, u_method int64 (U,): the pairs' status
+        and method codes, reported with their contacts (default ST_NOT_RUN / 0).
+        Returns the Events.
         """
-        n = self._n() if self.n_bodies is not None else len(pos_w)
-        self.n_bodies = n
-        old = self.keys
-        in_t = np.isin(old, tkeys)
-        in_u = np.isin(old, ukeys) & ~in_t
-        unconf = np.where(in_t, 0, self.unconfirmed + 1)
-        survive_u = in_u & (unconf < self.stale_steps)
-        kept = in_t | survive_u
-        fresh = tkeys[~np.isin(tkeys, old)]
-        keys = np.concatenate([old[kept], fresh])
-        order = np.argsort(keys, kind="stable")
-        keys = keys[order]
-        unconf = np.concatenate([unconf[kept], np.zeros(len(fresh), np.int64)])[order]
-        is_fresh = np.concatenate([np.zeros(int(kept.sum()), bool),
-                                   np.ones(len(fresh), bool)])[order]
-        ended = old[~kept]
-        # where each arbiter's stored contacts and new manifold are
-        src = np.zeros((len(keys), 2), np.int64)
-        src[:, 0] = np.searchsorted(self.c_key, keys, side="left")
-        src[:, 1] = np.searchsorted(self.c_key, keys, side="right")
-        src[is_fresh] = 0
-        if len(tkeys):
-            r = np.minimum(np.searchsorted(tkeys, keys), len(tkeys) - 1)
-            row = np.where(tkeys[r] == keys, r, -1).astype(np.int64)
-        else:
-            row = np.full(len(keys), -1, np.int64)
+        if self.n_bodies is None:
+            self.n_bodies = len(pos_w)
+        n = self.n_bodies
+        t, u = len(tkeys), len(ukeys)
+        if t_status is None:
+            t_status = np.full(t, ST_NOT_RUN, np.int64)
+        if t_method is None:
+            t_method = np.zeros(t, np.int64)
+        if u_status is None:
+            u_status = np.full(u, ST_NOT_RUN, np.int64)
+        if u_method is None:
+            u_method = np.zeros(u, np.int64)
         k = self.max_contacts
-        a_cap = len(keys) * k
-        n_id = np.zeros(a_cap, np.int64)
-        n_age = np.zeros(a_cap, np.int64)
-        n_la = np.zeros((a_cap, 3))
-        n_lb = np.zeros((a_cap, 3))
-        n_na = np.zeros((a_cap, 3))
-        n_pa = np.zeros((a_cap, 3))
-        n_pb = np.zeros((a_cap, 3))
-        n_n = np.zeros((a_cap, 3))
-        n_count = np.zeros(len(keys), np.int64)
-        ev_cap = len(self.c_id) + a_cap + 1
-        ev_arb = np.zeros(ev_cap, np.int64)
-        ev_kind = np.zeros(ev_cap, np.int64)
-        ev_id = np.zeros(ev_cap, np.int64)
-        if len(keys):
-            self.next_id, n_ev = persist_batch(
-                keys // n, keys % n, src, row, self.c_id, self.c_age, self.c_la, self.c_lb,
-                self.c_na, np.ascontiguousarray(cpts, dtype=np.float64),
-                np.ascontiguousarray(cnormal, dtype=np.float64),
-                np.ascontiguousarray(ccount, dtype=np.int64), pos_w, quat_w,
-                self.merge_distance, self.drift_threshold, k, self.next_id, n_id, n_age,
-                n_la, n_lb, n_na, n_pa, n_pb, n_n, n_count, ev_arb, ev_kind, ev_id)
-        else:
-            n_ev = 0
-        # events: pair events (id -1) and contact events, sorted by key then id
-        ended_rows = np.isin(self.c_key, ended)
-        e_key = np.concatenate([keys, ended, keys[ev_arb[:n_ev]], self.c_key[ended_rows]])
-        e_id = np.concatenate([np.full(len(keys) + len(ended), -1, np.int64), ev_id[:n_ev],
-                               self.c_id[ended_rows]])
-        e_kind = np.concatenate([np.where(is_fresh, 0, 1), np.full(len(ended), 2),
-                                 ev_kind[:n_ev], np.full(int(ended_rows.sum()), 2)])
-        o = np.lexsort((e_id, e_key))
-        e_key, e_id, e_kind = e_key[o], e_id[o], e_kind[o]
-        events = list(zip(_KIND_NAMES[e_kind].tolist(), (e_key // n).tolist(),
-                          (e_key % n).tolist(), e_id.tolist()))
-        # compact the new state
-        valid = (np.arange(a_cap) % k) < np.repeat(n_count, k)
-        self.keys = keys
-        self.unconfirmed = unconf.astype(np.int64)
-        self.c_key = np.repeat(keys, n_count)
-        self.c_id = n_id[valid]
-        self.c_age = n_age[valid]
-        self.c_la = n_la[valid]
-        self.c_lb = n_lb[valid]
-        self.c_na = n_na[valid]
-        self._world = (n_pa[valid], n_pb[valid], n_n[valid])
-        return events
+        a_cap = len(self.keys) + t
+        c_cap = a_cap * k
+        e_cap = a_cap * (1 + k) + len(self.c_id)
+        out_arb = (np.empty(a_cap, np.int64), np.empty(a_cap, np.int64),
+                   np.empty(a_cap + 1, np.int64), np.empty((a_cap, 2), np.int64))
+        i64 = [np.empty(c_cap, np.int64) for _ in range(4)]
+        f3 = [np.empty((c_cap, 3)) for _ in range(6)]
+        out_con = (*i64, *f3, np.empty(c_cap), np.empty(c_cap, np.int64),
+                   np.empty(c_cap, np.int64))
+        out_ev = tuple(np.empty(e_cap, np.int64) for _ in range(4))
+        old = (self.keys, self.unconfirmed, self.start, self.c_id, self.c_age, self.c_la,
+               self.c_lb, self.c_na)
+        new = (tkeys, t_status, t_method, cpts, cnormal, ccount)
+        settings = (self.merge_distance, self.drift_threshold, k, self.stale_steps)
+        na, nc, ne, self.next_id = arbiter_step(
+            n, old, new, (ukeys, u_status, u_method), pos_w, quat_w, settings,
+            self.next_id, out_arb, out_con, out_ev)
+        self.keys = out_arb[0][:na]
+        self.unconfirmed = out_arb[1][:na]
+        self.start = out_arb[2][:na + 1]
+        self._pairs = out_arb[3][:na]
+        c = [x[:nc] for x in out_con]
+        self.c_id, self.c_age, self.c_la, self.c_lb, self.c_na = c[2], c[3], c[4], c[5], c[6]
+        self._con = {"body_a": c[0], "body_b": c[1], "contact_id": c[2], "age": c[3],
+                     "point_a": c[7], "point_b": c[8], "normal": c[9], "depth": c[10],
+                     "status": c[11], "method": c[12]}
+        return Events(*(x[:ne] for x in out_ev))
 
     def contacts(self, pos_w=None, quat_w=None):
         """Every stored contact in the world, ordered by pair then id: dict of arrays
         body_a, body_b, contact_id, age (int64 (C,)), point_a, point_b, normal
-        (float64 (C, 3)), depth (float64 (C,), >= 0).  Without poses: as of the last
-        update; with poses: the stored local points moved to those poses."""
-        n = self.n_bodies or 1
-        a = self.c_key // n
-        b = self.c_key % n
+        (float64 (C, 3)), depth (float64 (C,), >= 0); without poses also status and
+        method (int64 (C,), the pair's this step).  Without poses: as of the last
+        update (the arrays are shared, do not modify them); with poses: the stored
+        local points moved to those poses."""
         if pos_w is None:
-            pa, pb, nrm = self._world if hasattr(self, "_world") else (
-                np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
-        else:
-            rot = quat_matrices(np.asarray(quat_w, np.float64))
-            pa = np.einsum("cij,cj->ci", rot[a], self.c_la) + pos_w[a]
-            pb = np.einsum("cij,cj->ci", rot[b], self.c_lb) + pos_w[b]
-            nrm = np.einsum("cij,cj->ci", rot[a], self.c_na)
+            return dict(self._con)
+        a, b = self._con["body_a"], self._con["body_b"]
+        rot = quat_matrices(np.asarray(quat_w, np.float64))
+        pos_w = np.asarray(pos_w, np.float64)
+        pa = np.einsum("cij,cj->ci", rot[a], self.c_la) + pos_w[a]
+        pb = np.einsum("cij,cj->ci", rot[b], self.c_lb) + pos_w[b]
+        nrm = np.einsum("cij,cj->ci", rot[a], self.c_na)
         depth = np.maximum(0.0, -np.sum((pb - pa) * nrm, axis=1))
-        return {"body_a": a.astype(np.int64), "body_b": b.astype(np.int64),
-                "contact_id": self.c_id.copy(), "age": self.c_age.copy(),
-                "point_a": pa, "point_b": pb, "normal": nrm, "depth": depth}
+        return {"body_a": a.copy(), "body_b": b.copy(), "contact_id": self.c_id.copy(),
+                "age": self.c_age.copy(), "point_a": pa, "point_b": pb, "normal": nrm,
+                "depth": depth}

@@ -29,21 +29,26 @@ from dataclasses import dataclass, field, fields
 import numba
 import numpy as np
 
-from .arbiters import ArbiterSet
-from .kernels.broadphase import find_pairs, world_aabbs
-from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_METHOD, OUT_SIZE, PLANE,
-                                ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_TOUCHING)
-from .kernels.manifold import MAX_MANIFOLD, manifold_batch
+from .arbiters import ArbiterSet, Events
+from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world_aabbs
+from .kernels.constants import M_AUTO, METHOD_NAMES, OUT_SIZE, PLANE, ST_FAILED
+from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
 from .kernels.narrowphase import collide_batch
 from .shapes import build_table
 
 PIPELINE_METHODS = ("auto", "gjk_epa", "mpr")
 BODY_KEYS = {"name", "shape", "static", "group", "mask"}
 MAX_BITS = 0xFFFFFFFF
-# batches at least this long run on all of numba's threads, shorter ones with
-# numba.set_num_threads(1): waking a second thread costs up to milliseconds on a loaded
-# machine, ~1 us on one thread.  Same compiled kernels, so the same numbers.
+# narrow-phase batches at least this long run on all of numba's threads, shorter ones
+# with numba.set_num_threads(1): waking a second thread costs up to milliseconds on a
+# loaded machine, ~1 us on one thread.  Same compiled kernels, so the same numbers.
 PARALLEL_MIN_ITEMS = 2048
+# the same for the cheap phases (bounds, broad phase, manifolds: 0.02-1 us per item).
+# Measured on the shared 2-core machine (bench scenes, 10,000 bodies): two threads made
+# the bounds 15-30x SLOWER (0.2 ms on one thread, 5-7 ms on two while the other core
+# was busy) and the broad phase 1.5-3x slower; a parallel region only pays when the
+# second core is idle and the work is many milliseconds.
+PARALLEL_MIN_CHEAP_ITEMS = 200_000
 
 
 @contextlib.contextmanager
@@ -134,8 +139,10 @@ class StepResult:
     normal (C, 3) unit, A -> B; depth (C,) >= 0
     method int64 (C,) method code of the pair's narrow phase (constants.M_*);
     status int64 (C,) the pair's status this step (constants.ST_*)
-    events list of (kind, body_a, body_b, contact_id): kind "began" / "persisted" /
-        "ended"; contact_id -1 for pair events
+    events arbiters.Events: arrays kind (EV_BEGAN / EV_PERSISTED / EV_ENDED), body_a,
+        body_b, contact_id (-1 for pair events); iterates as tuples (kind name
+        "began" / "persisted" / "ended", body_a, body_b, contact_id)
+    names is the pipeline's own list (shared between steps: do not modify it)
     timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the filter;
     n_narrowphase_pairs: pairs after the filter
     """
@@ -153,7 +160,7 @@ class StepResult:
     age: np.ndarray
     method: np.ndarray
     status: np.ndarray
-    events: list
+    events: Events
     timings: dict
     n_candidate_pairs: int
     n_narrowphase_pairs: int
@@ -230,8 +237,10 @@ class Pipeline:
         self._method = METHOD_NAMES.index(self.config.method)
         self._order = np.empty(0, np.int64)
         self._axis = -1
+        self._buffers = {}
         # batches this long or longer use the threaded kernels (read at each step)
         self.parallel_min_items = PARALLEL_MIN_ITEMS
+        self.parallel_min_cheap_items = PARALLEL_MIN_CHEAP_ITEMS
         self.arbiters = ArbiterSet(self.config.merge_distance, self.config.drift_threshold,
                                    self.config.max_contacts, self.config.stale_steps,
                                    n_bodies=self.n)
@@ -246,24 +255,22 @@ class Pipeline:
         if pos.shape != (self.n, 3) or quat.shape != (self.n, 4):
             raise ValueError(f"expected positions ({self.n}, 3) and orientations "
                              f"({self.n}, 4) quat_xyzw, got {pos.shape} and {quat.shape}")
-        norm = np.linalg.norm(quat, axis=1) if self.n else np.zeros(0)
-        bad = (~np.all(np.isfinite(pos), axis=1) | ~np.all(np.isfinite(quat), axis=1)
-               | ~(norm > 1e-12))
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
-            why = ("non-finite position" if not np.all(np.isfinite(pos[i])) else
-                   "non-finite quaternion" if not np.all(np.isfinite(quat[i])) else
-                   "zero quaternion")
+        unit = np.empty((self.n, 4))
+        i, why = normalise_poses(pos, quat, unit)
+        if i >= 0:
+            why = ("non-finite position", "non-finite quaternion", "zero quaternion")[why - 1]
             raise ValueError(f"body {i} ({self.names[i]!r}): {why}")
-        return pos, np.ascontiguousarray(quat / norm[:, None])
+        return pos, unit
 
-    def _filter(self, pairs):
-        i, j = pairs[:, 0], pairs[:, 1]
-        keep = ~(self.static[i] & self.static[j])
-        keep &= ((self.group[i] & self.mask[j]) != 0) & ((self.group[j] & self.mask[i]) != 0)
-        if len(self._acm):
-            keep &= ~np.isin(i * self.n + j, self._acm)
-        return pairs[keep]
+    def _buffer(self, name, shape, dtype=np.float64):
+        """A scratch array reused from step to step (grown by 1.5x when too short);
+        only for data that does not leave the step."""
+        buf = self._buffers.get(name)
+        if buf is None or buf.shape[0] < shape[0]:
+            buf = np.empty((max(shape[0], int(1.5 * (0 if buf is None else buf.shape[0])), 1),)
+                           + tuple(shape[1:]), dtype)
+            self._buffers[name] = buf
+        return buf
 
     def step(self, positions, orientations, stamp=0.0):
         """Run one step.
@@ -280,89 +287,82 @@ class Pipeline:
             stamp = float(stamp)
         except (TypeError, ValueError):
             raise ValueError(f"stamp must be a number, got {stamp!r}") from None
+        par = self.parallel_min_items
+        cheap = self.parallel_min_cheap_items
 
         t0 = time.perf_counter()
-        lo = np.empty((self.n, 3))
-        hi = np.empty((self.n, 3))
-        plane_w = np.empty((self.n, 4))
-        with _threads(self.n, self.parallel_min_items):
+        lo = self._buffer("lo", (self.n, 3))
+        hi = self._buffer("hi", (self.n, 3))
+        plane_w = self._buffer("plane_w", (self.n, 4))
+        with _threads(self.n, cheap):
             world_aabbs(t.codes, t.params, t.vrange, t.verts, pos, quat,
                         0.5 * self.config.proximity, lo, hi, plane_w)
         t1 = time.perf_counter()
         timings["bounds"] = t1 - t0
 
-        with _threads(self.n, self.parallel_min_items):
+        with _threads(self.n, cheap):
             cand, self._order, self._axis = find_pairs(lo, hi, self._is_plane, plane_w,
                                                        self._order, int(self._axis))
         t2 = time.perf_counter()
         timings["broadphase"] = t2 - t1
 
-        pairs = np.ascontiguousarray(self._filter(cand))
+        pairs = filter_pairs(cand, self.static, self.group, self.mask, self._acm, self.n)
         t3 = time.perf_counter()
         timings["filter"] = t3 - t2
 
         npairs = len(pairs)
-        out = np.zeros((npairs, OUT_SIZE))
-        status = np.full(npairs, ST_NOT_RUN, np.int64)
-        has_plane = self._is_plane[pairs[:, 0]] | self._is_plane[pairs[:, 1]]
-        for sel, method in ((has_plane, M_AUTO), (~has_plane, self._method)):
-            idx = np.flatnonzero(sel)
-            if len(idx):
-                o = np.zeros((len(idx), OUT_SIZE))
-                s = np.zeros(len(idx), np.int64)
-                with _threads(len(idx), self.parallel_min_items):
-                    collide_batch(t.codes, t.params, t.vrange, t.verts,
-                                  np.ascontiguousarray(pairs[idx]), pos, quat, method, o, s)
-                out[idx] = o
-                status[idx] = s
+        out = self._buffer("out", (npairs, OUT_SIZE))[:npairs]
+        status = self._buffer("status", (npairs,), np.int64)[:npairs]
+        if self._method == M_AUTO:
+            # pairs with a plane use the closed form (auto) whatever the method
+            with _threads(npairs, par):
+                collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat,
+                              M_AUTO, out, status)
+        else:
+            has_plane = self._is_plane[pairs[:, 0]] | self._is_plane[pairs[:, 1]]
+            for sel, method in ((has_plane, M_AUTO), (~has_plane, self._method)):
+                idx = np.flatnonzero(sel)
+                if len(idx):
+                    o = np.empty((len(idx), OUT_SIZE))
+                    s = np.empty(len(idx), np.int64)
+                    with _threads(len(idx), par):
+                        collide_batch(t.codes, t.params, t.vrange, t.verts,
+                                      np.ascontiguousarray(pairs[idx]), pos, quat, method,
+                                      o, s)
+                    out[idx] = o
+                    status[idx] = s
         t4 = time.perf_counter()
         timings["narrowphase"] = t4 - t3
 
-        # a row with NaN/Inf is a failure, whatever its status says: never pass it on
-        status[~np.all(np.isfinite(out), axis=1)] = ST_FAILED
-        touch = (status == ST_TOUCHING) | (status == ST_PENETRATING)
-        tp = np.ascontiguousarray(pairs[touch])
-        tout = np.ascontiguousarray(out[touch])
-        tst = np.ascontiguousarray(status[touch])
-        cpts = np.zeros((len(tp), MAX_MANIFOLD, 7))
-        cnormal = np.zeros((len(tp), 3))
-        ccount = np.zeros(len(tp), np.int64)
-        if len(tp):
-            with _threads(len(tp), self.parallel_min_items):
-                manifold_batch(t.codes, t.params, t.vrange, t.verts, tp, pos, quat, tout,
-                               tst, self.config.drift_threshold, cpts, cnormal, ccount)
+        # touching pairs -> manifolds; failed / not-run pairs keep their arbiters a while
+        rows = [self._buffer(f"split{k}", (npairs,), np.int64) for k in range(8)]
+        nt, nu = split_pairs(pairs, out, status, self.n, ST_FAILED, *rows)
+        cpts = self._buffer("cpts", (nt, MAX_MANIFOLD, 7))
+        cnormal = self._buffer("cnormal", (nt, 3))
+        ccount = self._buffer("ccount", (nt,), np.int64)
+        if nt:
+            with _threads(nt, cheap):
+                manifold_batch(t.codes, t.params, t.vrange, t.verts, pairs, rows[0][:nt],
+                               pos, quat, out, self.config.drift_threshold, cpts, cnormal,
+                               ccount)
         t5 = time.perf_counter()
         timings["manifold"] = t5 - t4
 
-        n = self.n
-        tkeys = tp[:, 0] * n + tp[:, 1]                     # sorted, as pairs are
-        undecided = (status == ST_FAILED) | (status == ST_NOT_RUN)
-        ukeys = pairs[undecided, 0] * n + pairs[undecided, 1]
-        events = self.arbiters.update_arrays(pos, quat, tkeys, cpts, cnormal, ccount, ukeys)
+        events = self.arbiters.update_arrays(
+            pos, quat, rows[1][:nt], cpts, cnormal, ccount, rows[5][:nu],
+            rows[2][:nt], rows[3][:nt], rows[6][:nu], rows[7][:nu])
         con = self.arbiters.contacts()
-        # each contact's pair row this step (pairs are sorted, so their keys are too)
-        pair_keys = pairs[:, 0] * n + pairs[:, 1]
-        ckeys = con["body_a"] * n + con["body_b"]
-        if npairs:
-            row = np.minimum(np.searchsorted(pair_keys, ckeys), npairs - 1)
-            found = pair_keys[row] == ckeys
-            c_status = np.where(found, status[row], ST_NOT_RUN).astype(np.int64)
-            c_method = np.where(found, out[row, OUT_METHOD], self._method).astype(np.int64)
-        else:
-            c_status = np.full(len(ckeys), ST_NOT_RUN, np.int64)
-            c_method = np.full(len(ckeys), self._method, np.int64)
-        keys = self.arbiters.pairs()
         t6 = time.perf_counter()
         timings["arbiters"] = t6 - t5
 
         return StepResult(
-            names=list(self.names), stamp=stamp,
-            pairs=keys,
+            names=self.names, stamp=stamp,
+            pairs=self.arbiters.pairs(),
             body_a=con["body_a"], body_b=con["body_b"],
             position=0.5 * (con["point_a"] + con["point_b"]),
             point_a=con["point_a"], point_b=con["point_b"], normal=con["normal"],
             depth=con["depth"], contact_id=con["contact_id"], age=con["age"],
-            method=c_method, status=c_status, events=events, timings=timings,
+            method=con["method"], status=con["status"], events=events, timings=timings,
             n_candidate_pairs=int(len(cand)), n_narrowphase_pairs=int(npairs))
 
     def warm_up(self):

@@ -2,6 +2,8 @@
 oracle, whose sphere/box/capsule/half-space pairs are themselves closed forms) and the
 sign-convention invariants.  Seeded; no timings."""
 
+import math
+
 import coal
 import numpy as np
 import pytest
@@ -293,3 +295,79 @@ def test_plane_against_every_shape(kind):
         np.testing.assert_allclose(r @ out_s[1:4], -nv, atol=1e-12)
         assert out_s[C.OUT_DIST] == pytest.approx(d, abs=1e-12)
     assert 0.3 * n <= hits <= 0.7 * n
+
+
+# --- sphere-cylinder (closed form added for speed; must match GJK/EPA and the exact sdf) ---
+def _sdf_cylinder(shape, p):
+    """Exact signed distance of a body-frame point to a (rounded) cylinder."""
+    rr, h = shape["radius"], 0.5 * shape["height"]
+    d0 = math.hypot(p[0], p[1]) - rr
+    d1 = abs(p[2]) - h
+    core = min(max(d0, d1), 0.0) + math.hypot(max(d0, 0.0), max(d1, 0.0))
+    return core - shape.get("margin", 0.0)
+
+
+def test_sphere_cylinder_closed_form_against_sdf_and_gjk_epa():
+    from mkcollision_ros import collide
+    rng = np.random.default_rng(77)
+    n, hits = 300, 0
+    for k in range(n):
+        sa_d = rand_shape(rng, "sphere")
+        sb_d = rand_shape(rng, "cylinder")
+        sa, _ = tup(sa_d)
+        sb, _ = tup(sb_d)
+        scale = sa[1][7] + sb[1][7]
+        r = rot(rng)
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        # mixture: some centres deep inside the cylinder, some near touching, some apart
+        t = u * rng.uniform(0.0, 1.5) * contact_offset(sa, sb, r, u)
+        if k % 10 == 0:
+            t = u * 1e-3 * scale     # centre near B's centre (deep; near the axis)
+        st, out = run(sa_d, sb_d, r, t)
+        assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
+        # exact: sphere distance = sdf_B(sphere centre) - sphere radius (incl. margins)
+        c_b = r.T @ (np.zeros(3) - t)
+        truth = _sdf_cylinder(sb_d, c_b) - sa_d["radius"] - sa_d.get("margin", 0.0)
+        d = out[C.OUT_DIST]
+        assert d == pytest.approx(truth, abs=1e-12 * scale)
+        hits += st != C.ST_SEPARATED
+        n_ = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
+        pa = out[C.OUT_PA:C.OUT_PA + 3]
+        pb = out[C.OUT_PB:C.OUT_PB + 3]
+        assert abs(np.linalg.norm(n_) - 1.0) < 1e-12
+        np.testing.assert_allclose(pb - pa, d * n_, atol=1e-12 * scale)
+        assert abs(np.linalg.norm(pa) - sa_d["radius"] - sa_d.get("margin", 0.0)) < 1e-9 * scale
+        assert abs(_sdf_cylinder(sb_d, r.T @ (pb - t))) < 1e-9 * scale
+        # swapped order flips the normal
+        st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
+        assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+        # agreement with GJK/EPA (issue targets: 1e-6 scale; 1e-3 rad when well posed)
+        q = [0.0, 0.0, 0.0, 1.0]
+        w = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+        qw = 0.5 * math.sqrt(max(0.0, 1.0 + np.trace(r)))
+        if qw > 1e-3:
+            q = list(np.append(w / (4.0 * qw), qw))
+            g = collide(sa_d, ([0.0, 0.0, 0.0], [0, 0, 0, 1]), sb_d, (list(t), q),
+                        method="gjk_epa")
+            assert g.distance == pytest.approx(d, abs=1e-6 * scale)
+            rho = math.hypot(c_b[0], c_b[1])
+            if abs(d) > 1e-3 * scale and rho > 1e-2 * scale:
+                ang = math.acos(min(1.0, float(g.normal @ n_)))
+                assert ang < 1e-3
+    assert 0.3 * n <= hits <= 0.8 * n
+
+
+def test_sphere_inside_cylinder_nearest_face():
+    s = {"type": "sphere", "radius": 0.3}
+    cyl = {"type": "cylinder", "radius": 1.0, "height": 2.0}
+    # nearest boundary of the centre (0.1, 0, 0.5): the top cap, 0.5 away
+    st, out = run(s, cyl, np.eye(3), -np.array([0.1, 0.0, 0.5]))
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.8, abs=1e-14)
+    # B must move down (-z) to push its top cap past the centre: normal A -> B is -z
+    assert out[C.OUT_NORMAL:C.OUT_NORMAL + 3] == pytest.approx([0, 0, -1], abs=1e-14)
+    # nearest boundary: the side, 0.2 away along +x
+    st, out = run(s, cyl, np.eye(3), -np.array([0.8, 0.0, 0.1]))
+    assert out[C.OUT_DIST] == pytest.approx(-0.5, abs=1e-14)
+    assert out[C.OUT_NORMAL:C.OUT_NORMAL + 3] == pytest.approx([-1, 0, 0], abs=1e-14)

@@ -1,5 +1,11 @@
 """Exact closed-form pair tests: sphere-sphere, sphere-box, sphere-capsule,
-capsule-capsule, and a half-space (plane) against any shape.
+sphere-cylinder, capsule-capsule, and a half-space (plane) against any shape; plus
+``box_box_sat``, the separating-axis depth of two boxes whose cores overlap (used by the
+dispatcher's auto method before GJK; not part of ``collide_analytic``, since separated
+boxes need GJK for their exact distance).
+
+All kernels here work on scalars (numba keeps them in registers): no array is allocated
+on the per-pair path.
 
 Every pair is reduced to the closest points of two *cores* (a point, a segment, a box;
 kernels/geometry.py) followed by subtracting the two inflation radii, which is exact
@@ -34,10 +40,10 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD,
+from .constants import (BOX, CAPSULE, CYLINDER, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, shape_scale, support_full
+from .geometry import inflation, shape_scale, support_full_xyz
 from .jit import njit_kernel
 
 
@@ -51,26 +57,8 @@ def _mv(r, v):
 
 
 @njit_kernel
-def _mtv(r, v):
-    """r.T @ v for a (3, 3) matrix and a (3,) vector."""
-    o = np.empty(3)
-    for i in range(3):
-        o[i] = r[0, i] * v[0] + r[1, i] * v[1] + r[2, i] * v[2]
-    return o
-
-
-@njit_kernel
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit_kernel
-def _cross(a, b):
-    o = np.empty(3)
-    o[0] = a[1] * b[2] - a[2] * b[1]
-    o[1] = a[2] * b[0] - a[0] * b[2]
-    o[2] = a[0] * b[1] - a[1] * b[0]
-    return o
 
 
 @njit_kernel
@@ -85,111 +73,63 @@ def classify(dist, scale):
 
 
 @njit_kernel
-def _any_perp(v, out):
-    """A unit vector perpendicular to ``v`` (3,) (or +z when v is zero)."""
-    ax, ay, az = abs(v[0]), abs(v[1]), abs(v[2])
-    if ax == 0.0 and ay == 0.0 and az == 0.0:
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = 1.0
-        return
-    # cross with the least aligned axis
-    if ax <= ay and ax <= az:
-        e = np.array([1.0, 0.0, 0.0])
-    elif ay <= az:
-        e = np.array([0.0, 1.0, 0.0])
-    else:
-        e = np.array([0.0, 0.0, 1.0])
-    c = _cross(v, e)
-    out[:] = c / math.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-
-
-@njit_kernel
-def _finish(ca, cb, core_dist, n, ra, rb, out):
-    """Write a result from core witness points ``ca``, ``cb`` (A frame), the signed core
-    distance along the unit normal ``n`` (A -> B) and the inflation radii."""
+def _finish_s(cax, cay, caz, core_dist, nx, ny, nz, ra, rb, out):
+    """``_finish`` on scalars (allocation-free): core witness on A (cax, cay, caz),
+    signed core distance along the unit normal (nx, ny, nz) (A -> B), radii."""
     dist = core_dist - ra - rb
     out[OUT_DIST] = dist
-    for i in range(3):
-        out[OUT_NORMAL + i] = n[i]
-        out[OUT_PA + i] = ca[i] + ra * n[i]
-        out[OUT_PB + i] = out[OUT_PA + i] + dist * n[i]
+    pax, pay, paz = cax + ra * nx, cay + ra * ny, caz + ra * nz
+    out[OUT_NORMAL] = nx
+    out[OUT_NORMAL + 1] = ny
+    out[OUT_NORMAL + 2] = nz
+    out[OUT_PA] = pax
+    out[OUT_PA + 1] = pay
+    out[OUT_PA + 2] = paz
+    out[OUT_PB] = pax + dist * nx
+    out[OUT_PB + 1] = pay + dist * ny
+    out[OUT_PB + 2] = paz + dist * nz
     out[OUT_ITERS] = 1.0
     out[OUT_METHOD] = M_ANALYTIC
     return dist
 
 
 @njit_kernel
-def _point_point(pa, pb, ra, rb, out):
-    d = pb - pa
-    dn = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    n = np.empty(3)
+def _point_point_s(ax, ay, az, bx, by, bz, ra, rb, out):
+    """Two inflated points (A frame): distance along b - a, +z when they coincide."""
+    dx, dy, dz = bx - ax, by - ay, bz - az
+    dn = math.sqrt(dx * dx + dy * dy + dz * dz)
     if dn > 0.0:
-        n[:] = d / dn
-    else:
-        n[0] = 0.0
-        n[1] = 0.0
-        n[2] = 1.0
-    return _finish(pa, pb, dn, n, ra, rb, out)
+        return _finish_s(ax, ay, az, dn, dx / dn, dy / dn, dz / dn, ra, rb, out)
+    return _finish_s(ax, ay, az, dn, 0.0, 0.0, 1.0, ra, rb, out)
 
 
 @njit_kernel
-def _closest_on_segment(p, a, b):
-    """Closest point to ``p`` on segment [a, b] (all (3,))."""
-    ab = b - a
-    den = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]
+def _closest_on_segment_s(px, py, pz, ax, ay, az, bx, by, bz):
+    """Closest point (x, y, z) to p on segment [a, b] (scalars)."""
+    ex, ey, ez = bx - ax, by - ay, bz - az
+    den = ex * ex + ey * ey + ez * ez
     if den <= 0.0:
-        return a.copy()
-    s = ((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1] + (p[2] - a[2]) * ab[2]) / den
+        return ax, ay, az
+    s = ((px - ax) * ex + (py - ay) * ey + (pz - az) * ez) / den
     s = min(1.0, max(0.0, s))
-    return a + s * ab
+    return ax + s * ex, ay + s * ey, az + s * ez
 
 
 @njit_kernel
-def _segment_segment(p1, q1, p2, q2):
-    """Closest points (c1 on [p1, q1], c2 on [p2, q2]); robust for parallel and
-    degenerate (point) segments."""
-    d1 = q1 - p1
-    d2 = q2 - p2
-    r = p1 - p2
-    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
-    e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
-    f = d2[0] * r[0] + d2[1] * r[1] + d2[2] * r[2]
-    if a <= 0.0 and e <= 0.0:
-        return p1.copy(), p2.copy()
-    if a <= 0.0:
-        return p1.copy(), _closest_on_segment(p1, p2, q2)
-    if e <= 0.0:
-        return _closest_on_segment(p2, p1, q1), p2.copy()
-    c = d1[0] * r[0] + d1[1] * r[1] + d1[2] * r[2]
-    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
-    den = a * e - b * b
-    # den = |d1|^2 |d2|^2 sin^2: treat as parallel below a relative threshold
-    if den > 1e-14 * a * e:
-        s = min(1.0, max(0.0, (b * f - c * e) / den))
+def _any_perp_s(vx, vy, vz):
+    """A unit vector perpendicular to v (or +z when v is zero), as a tuple."""
+    ax, ay, az = abs(vx), abs(vy), abs(vz)
+    if ax == 0.0 and ay == 0.0 and az == 0.0:
+        return 0.0, 0.0, 1.0
+    # cross with the least aligned axis
+    if ax <= ay and ax <= az:
+        cx, cy, cz = 0.0, vz, -vy
+    elif ay <= az:
+        cx, cy, cz = -vz, 0.0, vx
     else:
-        s = 0.0
-    t = (b * s + f) / e
-    if t < 0.0:
-        t = 0.0
-        s = min(1.0, max(0.0, -c / a))
-    elif t > 1.0:
-        t = 1.0
-        s = min(1.0, max(0.0, (b - c) / a))
-    c1 = p1 + s * d1
-    c2 = p2 + t * d2
-    if den <= 1e-14 * a * e:
-        # parallel: the pair above is valid but pick the middle of the overlap so the
-        # witness does not jump between ends; re-project the overlap midpoint
-        ua = _dot(p2 - p1, d1) / a
-        ub = _dot(q2 - p1, d1) / a
-        lo = max(0.0, min(ua, ub))
-        hi = min(1.0, max(ua, ub))
-        if lo <= hi:
-            s = 0.5 * (lo + hi)
-            c1 = p1 + s * d1
-            c2 = _closest_on_segment(c1, p2, q2)
-    return c1, c2
+        cx, cy, cz = vy, -vx, 0.0
+    cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+    return cx / cn, cy / cn, cz / cn
 
 
 @njit_kernel
@@ -197,55 +137,113 @@ def _sphere_box(sa, sb, r_ab, t_ab, out):
     """A = sphere (centre at A's origin), B = box (rounded by its margin)."""
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
-    h = sb[1][0:3]
+    prm = sb[1]
     # sphere centre in B's frame: r_ab^T (0 - t_ab)
-    c = -_mtv(r_ab, t_ab)
-    q = np.empty(3)
-    inside = True
-    for i in range(3):
-        q[i] = min(h[i], max(-h[i], c[i]))
-        if abs(c[i]) > h[i]:
-            inside = False
-    n_b = np.zeros(3)
+    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
+    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
+    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    h0, h1, h2 = prm[0], prm[1], prm[2]
+    q0 = min(h0, max(-h0, c0))
+    q1 = min(h1, max(-h1, c1))
+    q2 = min(h2, max(-h2, c2))
+    inside = abs(c0) <= h0 and abs(c1) <= h1 and abs(c2) <= h2
     if not inside:
-        d = q - c
-        core = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        n_b[:] = d / core
+        d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
+        core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        n0, n1, n2 = d0 / core, d1 / core, d2 / core
     else:
         # nearest face: B must move along -sign(c_k) e_k to push that face past the centre
-        k = 0
-        best = np.inf
-        for i in range(3):
-            g = h[i] - abs(c[i])
-            if g < best:
-                best = g
-                k = i
-        core = -best
-        s = 1.0 if c[k] >= 0.0 else -1.0
-        n_b[k] = -s
-        q[k] = s * h[k]
-    n = _mv(r_ab, n_b)
-    ca = np.zeros(3)
-    return _finish(ca, _mv(r_ab, q) + t_ab, core, n, ra, rb, out)
+        g0, g1, g2 = h0 - abs(c0), h1 - abs(c1), h2 - abs(c2)
+        n0, n1, n2 = 0.0, 0.0, 0.0
+        if g0 <= g1 and g0 <= g2:
+            core = -g0
+            s = 1.0 if c0 >= 0.0 else -1.0
+            n0 = -s
+            q0 = s * h0
+        elif g1 <= g2:
+            core = -g1
+            s = 1.0 if c1 >= 0.0 else -1.0
+            n1 = -s
+            q1 = s * h1
+        else:
+            core = -g2
+            s = 1.0 if c2 >= 0.0 else -1.0
+            n2 = -s
+            q2 = s * h2
+    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
+    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
+    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
+
+
+@njit_kernel
+def _sphere_cylinder(sa, sb, r_ab, t_ab, out):
+    """A = sphere (centre at A's origin), B = cylinder (radius R, half height h, axis z,
+    rounded by its margin).  The closest point of a solid of revolution to a point lies
+    in the point's meridian plane, so this is a point against the rectangle
+    [0, R] x [-h, h] in (rho, z); inside, the nearest of the side and the two caps."""
+    ra = inflation(sa[0], sa[1])
+    rb = inflation(sb[0], sb[1])
+    rr, h = sb[1][0], sb[1][1]
+    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
+    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
+    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    rho = math.sqrt(c0 * c0 + c1 * c1)
+    if rho > 0.0:
+        ux, uy = c0 / rho, c1 / rho
+    else:
+        ux, uy = 1.0, 0.0
+    if rho <= rr and abs(c2) <= h:
+        # centre inside the core: the nearer of the side and the cap
+        g_side = rr - rho
+        g_cap = h - abs(c2)
+        if g_side < g_cap:
+            core = -g_side
+            n0, n1, n2 = -ux, -uy, 0.0
+        else:
+            core = -g_cap
+            s = 1.0 if c2 >= 0.0 else -1.0
+            n0, n1, n2 = 0.0, 0.0, -s
+    else:
+        if rho > rr:
+            q0, q1 = rr * ux, rr * uy
+        else:
+            q0, q1 = c0, c1
+        q2 = min(h, max(-h, c2))
+        d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
+        core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        n0, n1, n2 = d0 / core, d1 / core, d2 / core
+    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
+    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
+    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
 
 @njit_kernel
 def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     """A = any non-plane shape, B = half-space n.x <= d (B's frame)."""
-    nb = sb[1][0:3]
+    nb = sb[1]
     d = sb[1][3]
-    n_a = _mv(r_ab, nb)                     # plane normal in A's frame
-    dirn = -n_a
-    x = np.empty(3)
-    support_full(sa[0], sa[1], verts, sa[2], sa[3], dirn, x)
+    # plane normal in A's frame
+    nax = r_ab[0, 0] * nb[0] + r_ab[0, 1] * nb[1] + r_ab[0, 2] * nb[2]
+    nay = r_ab[1, 0] * nb[0] + r_ab[1, 1] * nb[1] + r_ab[1, 2] * nb[2]
+    naz = r_ab[2, 0] * nb[0] + r_ab[2, 1] * nb[1] + r_ab[2, 2] * nb[2]
+    x0, x1, x2 = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], -nax, -nay, -naz)
     # signed distance: n.(x in B's frame) - d
-    xb = _mtv(r_ab, x - t_ab)
-    dist = nb[0] * xb[0] + nb[1] * xb[1] + nb[2] * xb[2] - d
-    out[OUT_DIST] = dist
+    y0, y1, y2 = x0 - t_ab[0], x1 - t_ab[1], x2 - t_ab[2]
+    dist = -d
     for i in range(3):
-        out[OUT_NORMAL + i] = -n_a[i]
-        out[OUT_PA + i] = x[i]
-        out[OUT_PB + i] = x[i] - dist * n_a[i]
+        dist += nb[i] * (r_ab[0, i] * y0 + r_ab[1, i] * y1 + r_ab[2, i] * y2)
+    out[OUT_DIST] = dist
+    out[OUT_NORMAL] = -nax
+    out[OUT_NORMAL + 1] = -nay
+    out[OUT_NORMAL + 2] = -naz
+    out[OUT_PA] = x0
+    out[OUT_PA + 1] = x1
+    out[OUT_PA + 2] = x2
+    out[OUT_PB] = x0 - dist * nax
+    out[OUT_PB + 1] = x1 - dist * nay
+    out[OUT_PB + 2] = x2 - dist * naz
     out[OUT_ITERS] = 1.0
     out[OUT_METHOD] = M_ANALYTIC
     return dist
@@ -262,43 +260,323 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
     ra = inflation(ca, sa[1])
     rb = inflation(cb, sb[1])
     if ca == SPHERE and cb == SPHERE:
-        return True, _point_point(np.zeros(3), t_ab.copy(), ra, rb, out)
+        return True, _point_point_s(0.0, 0.0, 0.0, t_ab[0], t_ab[1], t_ab[2], ra, rb, out)
     if ca == SPHERE and cb == BOX:
         return True, _sphere_box(sa, sb, r_ab, t_ab, out)
+    if ca == SPHERE and cb == CYLINDER:
+        return True, _sphere_cylinder(sa, sb, r_ab, t_ab, out)
     if ca == SPHERE and cb == CAPSULE:
         hb = sb[1][1]
-        p = t_ab + hb * r_ab[:, 2]
-        q = t_ab - hb * r_ab[:, 2]
-        c2 = _closest_on_segment(np.zeros(3), p, q)
-        if c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2] > 0.0:
-            return True, _point_point(np.zeros(3), c2, ra, rb, out)
-        n = np.empty(3)
-        _any_perp(r_ab[:, 2].copy(), n)
-        return True, _finish(np.zeros(3), c2, 0.0, n, ra, rb, out)
+        px, py, pz = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
+        qx, qy, qz = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
+        cx, cy, cz = _closest_on_segment_s(0.0, 0.0, 0.0, px, py, pz, qx, qy, qz)
+        if cx * cx + cy * cy + cz * cz > 0.0:
+            return True, _point_point_s(0.0, 0.0, 0.0, cx, cy, cz, ra, rb, out)
+        nx, ny, nz = _any_perp_s(r_ab[0, 2], r_ab[1, 2], r_ab[2, 2])
+        return True, _finish_s(0.0, 0.0, 0.0, 0.0, nx, ny, nz, ra, rb, out)
     if ca == CAPSULE and cb == CAPSULE:
-        ha = sa[1][1]
-        hb = sb[1][1]
-        p1 = np.array([0.0, 0.0, ha])
-        q1 = np.array([0.0, 0.0, -ha])
-        p2 = t_ab + hb * r_ab[:, 2]
-        q2 = t_ab - hb * r_ab[:, 2]
-        c1, c2 = _segment_segment(p1, q1, p2, q2)
-        d = c2 - c1
-        dn = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        if dn > 1e-15 * shape_scale(sa, sb):
-            return True, _point_point(c1, c2, ra, rb, out)
-        # crossing axes: separate along the common perpendicular
-        n = _cross(q1 - p1, q2 - p2)
-        nn = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
-        if nn > 0.0:
-            n /= nn
-            # orient from A's centre towards B's centre when that is defined
-            if n[0] * t_ab[0] + n[1] * t_ab[1] + n[2] * t_ab[2] < 0.0:
-                n = -n
-        else:
-            _any_perp(np.array([0.0, 0.0, 1.0]), n)
-        return True, _finish(c1, c1, 0.0, n, ra, rb, out)
+        return True, _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out)
     return False, 0.0
+
+
+@njit_kernel
+def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
+    """Two capsules: closest points of the axis segments (Ericson 5.1.9), scalars."""
+    ha = sa[1][1]
+    hb = sb[1][1]
+    p1x, p1y, p1z = 0.0, 0.0, ha
+    p2x, p2y, p2z = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
+    q2x, q2y, q2z = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
+    # d1 = q1 - p1 = (0, 0, -2 ha), d2 = q2 - p2, r = p1 - p2
+    d1x, d1y, d1z = 0.0, 0.0, -2.0 * ha
+    d2x, d2y, d2z = q2x - p2x, q2y - p2y, q2z - p2z
+    rx, ry, rz = p1x - p2x, p1y - p2y, p1z - p2z
+    a = d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
+    if a <= 0.0 and e <= 0.0:
+        s, t = 0.0, 0.0
+        den = 0.0
+    elif a <= 0.0:
+        s = 0.0
+        t = min(1.0, max(0.0, f / e))
+        den = 0.0
+    elif e <= 0.0:
+        t = 0.0
+        s = min(1.0, max(0.0, -(d1z * rz) / a))
+        den = 0.0
+    else:
+        c = d1z * rz
+        b = d1z * d2z
+        den = a * e - b * b
+        # den = |d1|^2 |d2|^2 sin^2: treat as parallel below a relative threshold
+        if den > 1e-14 * a * e:
+            s = min(1.0, max(0.0, (b * f - c * e) / den))
+        else:
+            s = 0.0
+        t = (b * s + f) / e
+        if t < 0.0:
+            t = 0.0
+            s = min(1.0, max(0.0, -c / a))
+        elif t > 1.0:
+            t = 1.0
+            s = min(1.0, max(0.0, (b - c) / a))
+    c1x, c1y, c1z = p1x + s * d1x, p1y + s * d1y, p1z + s * d1z
+    c2x, c2y, c2z = p2x + t * d2x, p2y + t * d2y, p2z + t * d2z
+    if a > 0.0 and e > 0.0 and den <= 1e-14 * a * e:
+        # parallel: the pair above is valid but pick the middle of the overlap so the
+        # witness does not jump between ends; re-project the overlap midpoint
+        ua = ((p2x - p1x) * d1x + (p2y - p1y) * d1y + (p2z - p1z) * d1z) / a
+        ub = ((q2x - p1x) * d1x + (q2y - p1y) * d1y + (q2z - p1z) * d1z) / a
+        lo = max(0.0, min(ua, ub))
+        hi = min(1.0, max(ua, ub))
+        if lo <= hi:
+            s = 0.5 * (lo + hi)
+            c1x, c1y, c1z = p1x + s * d1x, p1y + s * d1y, p1z + s * d1z
+            c2x, c2y, c2z = _closest_on_segment_s(c1x, c1y, c1z, p2x, p2y, p2z,
+                                                  q2x, q2y, q2z)
+    dx, dy, dz = c2x - c1x, c2y - c1y, c2z - c1z
+    dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if dn > 1e-15 * shape_scale(sa, sb):
+        return _point_point_s(c1x, c1y, c1z, c2x, c2y, c2z, ra, rb, out)
+    # crossing axes: separate along the common perpendicular d1 x d2
+    nx = d1y * d2z - d1z * d2y
+    ny = d1z * d2x - d1x * d2z
+    nz = d1x * d2y - d1y * d2x
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if nn > 0.0:
+        nx /= nn
+        ny /= nn
+        nz /= nn
+        # orient from A's centre towards B's centre when that is defined
+        if nx * t_ab[0] + ny * t_ab[1] + nz * t_ab[2] < 0.0:
+            nx, ny, nz = -nx, -ny, -nz
+    else:
+        nx, ny, nz = _any_perp_s(0.0, 0.0, 1.0)
+    return _finish_s(c1x, c1y, c1z, 0.0, nx, ny, nz, ra, rb, out)
+
+
+@njit_kernel
+def box_box_sat(sa, sb, r_ab, t_ab, out):
+    """Penetration of two boxes whose cores overlap, by the separating-axis theorem.
+
+    The minimum translation of two convex polytopes is along a face normal of their
+    Minkowski difference: a face normal of A, of B, or a cross product of an edge of
+    each (15 axes for boxes; Gottschalk, Lin, Manocha, "OBBTree", SIGGRAPH 1996, for the
+    projected radii).  The smallest overlap over the 15 axes is the exact core depth;
+    margins add exactly (the shapes are the cores grown by balls).  Face axes are
+    preferred over edge axes within 1e-9 * scale.  Witness points: the deepest feature
+    of the other box, taken to its nearest point within the face (face axes), or the
+    closest points of the two edges (edge axes), with pb - pa == dist * normal.
+
+    sa, sb  box shape tuples; r_ab (3, 3), t_ab (3,) pose of B in A's frame (m)
+    out     float64[OUT_SIZE] written (A's frame) only when the cores overlap.
+    Returns the status, or ST_NOT_RUN when an axis separates the cores (then the exact
+    distance needs GJK; ``out`` is untouched).
+    """
+    a = sa[1]
+    b = sb[1]
+    scale = shape_scale(sa, sb)
+    best = np.inf
+    kind = -1
+    ki = 0
+    kj = 0
+    # faces of A: axis e_i
+    for i in range(3):
+        rbl = b[0] * abs(r_ab[i, 0]) + b[1] * abs(r_ab[i, 1]) + b[2] * abs(r_ab[i, 2])
+        ov = a[i] + rbl - abs(t_ab[i])
+        if ov < 0.0:
+            return ST_NOT_RUN
+        if ov < best:
+            best = ov
+            kind = 0
+            ki = i
+    # faces of B: axis r_ab[:, j]
+    for j in range(3):
+        ral = a[0] * abs(r_ab[0, j]) + a[1] * abs(r_ab[1, j]) + a[2] * abs(r_ab[2, j])
+        tl = t_ab[0] * r_ab[0, j] + t_ab[1] * r_ab[1, j] + t_ab[2] * r_ab[2, j]
+        ov = ral + b[j] - abs(tl)
+        if ov < 0.0:
+            return ST_NOT_RUN
+        if ov < best:
+            best = ov
+            kind = 1
+            kj = j
+    face_best = best
+    # edge pairs: axis e_i x r_ab[:, j]
+    for i in range(3):
+        for j in range(3):
+            c0, c1, c2 = r_ab[0, j], r_ab[1, j], r_ab[2, j]
+            if i == 0:
+                l0, l1, l2 = 0.0, -c2, c1
+            elif i == 1:
+                l0, l1, l2 = c2, 0.0, -c0
+            else:
+                l0, l1, l2 = -c1, c0, 0.0
+            ll = l0 * l0 + l1 * l1 + l2 * l2
+            if not ll > 1e-12:
+                continue     # parallel edges: covered by the face axes
+            ln = math.sqrt(ll)
+            ral = a[0] * abs(l0) + a[1] * abs(l1) + a[2] * abs(l2)
+            rbl = 0.0
+            for m in range(3):
+                rbl += b[m] * abs(l0 * r_ab[0, m] + l1 * r_ab[1, m] + l2 * r_ab[2, m])
+            tl = l0 * t_ab[0] + l1 * t_ab[1] + l2 * t_ab[2]
+            ov = (ral + rbl - abs(tl)) / ln
+            if ov < 0.0:
+                return ST_NOT_RUN
+            if ov < best and ov < face_best - 1e-9 * scale:
+                best = ov
+                kind = 2
+                ki = i
+                kj = j
+    depth = best
+    ra = inflation(sa[0], sa[1])
+    rb = inflation(sb[0], sb[1])
+    if kind == 0:
+        s = 1.0 if t_ab[ki] >= 0.0 else -1.0
+        nx, ny, nz = 0.0, 0.0, 0.0
+        if ki == 0:
+            nx = s
+        elif ki == 1:
+            ny = s
+        else:
+            nz = s
+        # B's deepest feature along -n; flat directions: nearest to A's face centre
+        fx, fy, fz = s * a[0] * nx * s, s * a[1] * ny * s, s * a[2] * nz * s
+        px, py, pz = _box_feature_point(b, r_ab, t_ab, -nx, -ny, -nz, fx, fy, fz)
+        # A's witness: on A's face, nearest to B's point; then B's = A's - depth n
+        qx, qy, qz = px + depth * nx, py + depth * ny, pz + depth * nz
+        qx = min(a[0], max(-a[0], qx))
+        qy = min(a[1], max(-a[1], qy))
+        qz = min(a[2], max(-a[2], qz))
+    elif kind == 1:
+        tl = t_ab[0] * r_ab[0, kj] + t_ab[1] * r_ab[1, kj] + t_ab[2] * r_ab[2, kj]
+        s = 1.0 if tl >= 0.0 else -1.0
+        nx, ny, nz = s * r_ab[0, kj], s * r_ab[1, kj], s * r_ab[2, kj]
+        # B's face centre (A's frame), A's deepest feature along +n nearest to it
+        fx = t_ab[0] - s * b[kj] * r_ab[0, kj]
+        fy = t_ab[1] - s * b[kj] * r_ab[1, kj]
+        fz = t_ab[2] - s * b[kj] * r_ab[2, kj]
+        ax_, ay_, az_ = _box_feature_point_a(a, nx, ny, nz, fx, fy, fz)
+        # B's witness on B's face nearest to A's point (B's frame clamp), back to A
+        px, py, pz = ax_ - depth * nx, ay_ - depth * ny, az_ - depth * nz
+        dx, dy, dz = px - t_ab[0], py - t_ab[1], pz - t_ab[2]
+        u0 = r_ab[0, 0] * dx + r_ab[1, 0] * dy + r_ab[2, 0] * dz
+        u1 = r_ab[0, 1] * dx + r_ab[1, 1] * dy + r_ab[2, 1] * dz
+        u2 = r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz
+        u0 = min(b[0], max(-b[0], u0))
+        u1 = min(b[1], max(-b[1], u1))
+        u2 = min(b[2], max(-b[2], u2))
+        px = r_ab[0, 0] * u0 + r_ab[0, 1] * u1 + r_ab[0, 2] * u2 + t_ab[0]
+        py = r_ab[1, 0] * u0 + r_ab[1, 1] * u1 + r_ab[1, 2] * u2 + t_ab[1]
+        pz = r_ab[2, 0] * u0 + r_ab[2, 1] * u1 + r_ab[2, 2] * u2 + t_ab[2]
+        qx, qy, qz = px + depth * nx, py + depth * ny, pz + depth * nz
+    else:
+        c0, c1, c2 = r_ab[0, kj], r_ab[1, kj], r_ab[2, kj]
+        if ki == 0:
+            nx, ny, nz = 0.0, -c2, c1
+        elif ki == 1:
+            nx, ny, nz = c2, 0.0, -c0
+        else:
+            nx, ny, nz = -c1, c0, 0.0
+        ln = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / ln, ny / ln, nz / ln
+        if nx * t_ab[0] + ny * t_ab[1] + nz * t_ab[2] < 0.0:
+            nx, ny, nz = -nx, -ny, -nz
+        # A's edge along e_ki through its support point along +n
+        e0 = a[0] if nx >= 0.0 else -a[0]
+        e1 = a[1] if ny >= 0.0 else -a[1]
+        e2 = a[2] if nz >= 0.0 else -a[2]
+        if ki == 0:
+            e0 = 0.0
+        elif ki == 1:
+            e1 = 0.0
+        else:
+            e2 = 0.0
+        # B's edge along r_ab[:, kj] through its support point along -n
+        g0, g1, g2 = 0.0, 0.0, 0.0
+        for m in range(3):
+            if m != kj:
+                mm = -(r_ab[0, m] * nx + r_ab[1, m] * ny + r_ab[2, m] * nz)
+                bm = b[m] if mm >= 0.0 else -b[m]
+                g0 += r_ab[0, m] * bm
+                g1 += r_ab[1, m] * bm
+                g2 += r_ab[2, m] * bm
+        g0 += t_ab[0]
+        g1 += t_ab[1]
+        g2 += t_ab[2]
+        # closest points of the lines e + s e_ki and g + u c (unit directions)
+        w0, w1, w2 = e0 - g0, e1 - g1, e2 - g2
+        bb = r_ab[ki, kj]
+        dd = w0 if ki == 0 else (w1 if ki == 1 else w2)
+        ee = c0 * w0 + c1 * w1 + c2 * w2
+        den = 1.0 - bb * bb
+        sp = (bb * ee - dd) / den
+        up = (ee - bb * dd) / den
+        sp = min(a[ki], max(-a[ki], sp))
+        up = min(b[kj], max(-b[kj], up))
+        qx, qy, qz = e0, e1, e2
+        if ki == 0:
+            qx += sp
+        elif ki == 1:
+            qy += sp
+        else:
+            qz += sp
+        px, py, pz = g0 + up * c0, g1 + up * c1, g2 + up * c2
+        # split any mismatch so that pb - pa == -depth n exactly
+        hx = 0.5 * ((px - qx) + depth * nx)
+        hy = 0.5 * ((py - qy) + depth * ny)
+        hz = 0.5 * ((pz - qz) + depth * nz)
+        qx, qy, qz = qx + hx, qy + hy, qz + hz
+    dist = _finish_s(qx, qy, qz, -depth, nx, ny, nz, ra, rb, out)
+    return classify(dist, scale)
+
+
+@njit_kernel
+def _box_feature_point(b, r_ab, t_ab, dx, dy, dz, fx, fy, fz):
+    """Point (A's frame) of B's deepest feature along the A-frame direction d: the
+    support vertex, with each coordinate whose direction component vanishes (a flat
+    feature) taken nearest to the A-frame point f."""
+    out0, out1, out2 = t_ab[0], t_ab[1], t_ab[2]
+    for m in range(3):
+        mm = r_ab[0, m] * dx + r_ab[1, m] * dy + r_ab[2, m] * dz
+        if abs(mm) > 1e-12:
+            bm = b[m] if mm > 0.0 else -b[m]
+        else:
+            fm = (r_ab[0, m] * (fx - t_ab[0]) + r_ab[1, m] * (fy - t_ab[1])
+                  + r_ab[2, m] * (fz - t_ab[2]))
+            bm = min(b[m], max(-b[m], fm))
+        out0 += r_ab[0, m] * bm
+        out1 += r_ab[1, m] * bm
+        out2 += r_ab[2, m] * bm
+    return out0, out1, out2
+
+
+@njit_kernel
+def _box_feature_point_a(a, dx, dy, dz, fx, fy, fz):
+    """``_box_feature_point`` for A's own box (A's frame, no transform)."""
+    if abs(dx) > 1e-12:
+        x = a[0] if dx > 0.0 else -a[0]
+    else:
+        x = min(a[0], max(-a[0], fx))
+    if abs(dy) > 1e-12:
+        y = a[1] if dy > 0.0 else -a[1]
+    else:
+        y = min(a[1], max(-a[1], fy))
+    if abs(dz) > 1e-12:
+        z = a[2] if dz > 0.0 else -a[2]
+    else:
+        z = min(a[2], max(-a[2], fz))
+    return x, y, z
+
+
+@njit_kernel
+def closed_form_ordered(sa, sb, verts, r_ab, t_ab, out):
+    """Signed distance (m) of a pair in canonical order that has a closed form (the
+    dispatcher checks which); writes ``out`` as ``collide_analytic`` does."""
+    ran, dist = _ordered(sa, sb, verts, r_ab, t_ab, out)
+    return dist
 
 
 @njit_kernel
@@ -319,7 +597,7 @@ def collide_analytic(sa, sb, verts, r_ab, t_ab, out):
             return ST_NOT_RUN
         return classify(dist, shape_scale(sa, sb))
     # swapped: solve (B, A) in B's frame, then map back and flip the normal
-    r_ba = r_ab.T.copy()
+    r_ba = np.ascontiguousarray(r_ab.T)
     t_ba = -_mv(r_ba, t_ab)
     tmp = np.empty(out.shape[0])
     ran, dist = _ordered(sb, sa, verts, r_ba, t_ba, tmp)

@@ -42,65 +42,29 @@ thousand bodies: waking the second thread costs up to milliseconds on a loaded
 machine, so the pipeline runs smaller batches with ``numba.set_num_threads(1)`` (the
 same compiled code, hence the same numbers).
 """
+import math
+
 import numpy as np
 
-from .constants import P_MARGIN, PLANE
-from .geometry import quat_to_matrix, support_full
+from .constants import BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, P_MARGIN, PLANE, SPHERE
 from .jit import njit_kernel, njit_parallel, prange
 
 # planes whose world normal has off-axis components below this are axis-aligned
 # (dimensionless, components of a unit vector)
 PLANE_AXIS_TOL = 1e-12
-# the warm insertion sort gives up after this many swaps per element and re-sorts cold
-SORT_SWAP_CAP = 8
-
-
-@njit_kernel
-def _aabb_one(i, codes, params, vrange, verts, pos_w, quat_w, grow, lo, hi, plane_w):
-    """Row i of world_aabbs."""
-    r = quat_to_matrix(quat_w[i])
-    prm = params[i]
-    if codes[i] == PLANE:
-        nw = np.empty(3)
-        for k in range(3):
-            nw[k] = r[k, 0] * prm[0] + r[k, 1] * prm[1] + r[k, 2] * prm[2]
-        dw = prm[3] + nw[0] * pos_w[i, 0] + nw[1] * pos_w[i, 1] + nw[2] * pos_w[i, 2]
-        dw += prm[P_MARGIN] + grow
-        for k in range(3):
-            plane_w[i, k] = nw[k]
-            lo[i, k] = -np.inf
-            hi[i, k] = np.inf
-        plane_w[i, 3] = dw
-        for k in range(3):
-            aligned = True
-            for j in range(3):
-                if j != k and abs(nw[j]) > PLANE_AXIS_TOL:
-                    aligned = False
-            if aligned:
-                # n_w = +-e_k: the half-space is x_k <= dw or x_k >= -dw
-                if nw[k] > 0.0:
-                    hi[i, k] = dw / nw[k]
-                else:
-                    lo[i, k] = dw / nw[k]
-        return
-    for k in range(4):
-        plane_w[i, k] = 0.0
-    d = np.empty(3)
-    s = np.empty(3)
-    v0, vn = vrange[i, 0], vrange[i, 1]
-    for k in range(3):
-        # world axis e_k seen from the body frame: R^T e_k = row k of R
-        d[0], d[1], d[2] = r[k, 0], r[k, 1], r[k, 2]
-        support_full(codes[i], prm, verts, v0, vn, d, s)
-        hi[i, k] = pos_w[i, k] + r[k, 0] * s[0] + r[k, 1] * s[1] + r[k, 2] * s[2] + grow
-        d[0], d[1], d[2] = -r[k, 0], -r[k, 1], -r[k, 2]
-        support_full(codes[i], prm, verts, v0, vn, d, s)
-        lo[i, k] = pos_w[i, k] + r[k, 0] * s[0] + r[k, 1] * s[1] + r[k, 2] * s[2] - grow
+# grid cell edge = this x the mean largest AABB extent of the bodies (dimensionless)
+GRID_CELL_SCALE = 1.5
+# a body spanning more than this many cells along an axis is tested against every body
+GRID_BIG_CELLS = 4
+# at most this many cells along an axis (the cell grows for very spread scenes; keys
+# pack each cell coordinate in 21 bits)
+GRID_MAX_CELLS = 1 << 20
 
 
 @njit_parallel
 def world_aabbs(codes, params, vrange, verts, pos_w, quat_w, grow, lo, hi, plane_w):
-    """World AABBs of N bodies.
+    """World AABBs of N bodies, exact (closed forms of each shape's extent along the
+    world axes; a hull's rotated vertices), grown by the margin and ``grow``.
 
     codes int64 (N,), params float64 (N, 8), vrange int64 (N, 2), verts float64 (M, 3):
         the shape table (body frames, metres).
@@ -109,106 +73,190 @@ def world_aabbs(codes, params, vrange, verts, pos_w, quat_w, grow, lo, hi, plane
     lo, hi float64 (N, 3) out: world AABB corners (m); planes get +-inf where unbounded.
     plane_w float64 (N, 4) out: for planes (n_w (3,), d_w) of the grown world half-space
         n_w . x <= d_w; zeros for other bodies.
+    (One loop body without calls taking arrays: those cost ~0.3 us per body of
+    reference counting.)
     """
     for i in prange(codes.shape[0]):
-        _aabb_one(i, codes, params, vrange, verts, pos_w, quat_w, grow, lo, hi, plane_w)
+        x, y, z, w = quat_w[i, 0], quat_w[i, 1], quat_w[i, 2], quat_w[i, 3]
+        # rows of the rotation matrix: row k is world axis e_k in the body frame
+        r00 = 1.0 - 2.0 * (y * y + z * z)
+        r01 = 2.0 * (x * y - z * w)
+        r02 = 2.0 * (x * z + y * w)
+        r10 = 2.0 * (x * y + z * w)
+        r11 = 1.0 - 2.0 * (x * x + z * z)
+        r12 = 2.0 * (y * z - x * w)
+        r20 = 2.0 * (x * z - y * w)
+        r21 = 2.0 * (y * z + x * w)
+        r22 = 1.0 - 2.0 * (x * x + y * y)
+        code = codes[i]
+        p0, p1, p2 = params[i, 0], params[i, 1], params[i, 2]
+        pad = params[i, P_MARGIN] + grow
+        if code == PLANE:
+            n0 = r00 * p0 + r01 * p1 + r02 * p2
+            n1 = r10 * p0 + r11 * p1 + r12 * p2
+            n2 = r20 * p0 + r21 * p1 + r22 * p2
+            dw = params[i, 3] + n0 * pos_w[i, 0] + n1 * pos_w[i, 1] + n2 * pos_w[i, 2] + pad
+            plane_w[i, 0] = n0
+            plane_w[i, 1] = n1
+            plane_w[i, 2] = n2
+            plane_w[i, 3] = dw
+            for k in range(3):
+                lo[i, k] = -np.inf
+                hi[i, k] = np.inf
+            for k in range(3):
+                nk = n0 if k == 0 else (n1 if k == 1 else n2)
+                off = 0.0
+                for q in range(3):
+                    if q != k:
+                        off = max(off, abs(n0 if q == 0 else (n1 if q == 1 else n2)))
+                if off <= PLANE_AXIS_TOL:
+                    # n_w = +-e_k: the half-space is x_k <= dw or x_k >= -dw
+                    if nk > 0.0:
+                        hi[i, k] = dw / nk
+                    elif nk < 0.0:
+                        lo[i, k] = dw / nk
+            continue
+        for k in range(4):
+            plane_w[i, k] = 0.0
+        for k in range(3):
+            if k == 0:
+                a0, a1, a2 = r00, r01, r02
+            elif k == 1:
+                a0, a1, a2 = r10, r11, r12
+            else:
+                a0, a1, a2 = r20, r21, r22
+            # support values of the core along +a (up) and -a (down), body frame
+            if code == SPHERE:
+                up = p0
+                down = p0
+            elif code == ELLIPSOID:
+                up = math.sqrt((p0 * a0) ** 2 + (p1 * a1) ** 2 + (p2 * a2) ** 2)
+                down = up
+            elif code == BOX:
+                up = abs(a0) * p0 + abs(a1) * p1 + abs(a2) * p2
+                down = up
+            elif code == CAPSULE:
+                up = abs(a2) * p1 + p0
+                down = up
+            elif code == CYLINDER:
+                up = abs(a2) * p1 + p0 * math.sqrt(a0 * a0 + a1 * a1)
+                down = up
+            elif code == CONE:
+                rim = p0 * math.sqrt(a0 * a0 + a1 * a1)
+                up = max(p1 * a2, rim - p1 * a2)
+                down = max(-p1 * a2, rim + p1 * a2)
+            else:  # CONVEX
+                up = -np.inf
+                down = -np.inf
+                for v in range(vrange[i, 0], vrange[i, 0] + vrange[i, 1]):
+                    d = a0 * verts[v, 0] + a1 * verts[v, 1] + a2 * verts[v, 2]
+                    up = max(up, d)
+                    down = max(down, -d)
+            hi[i, k] = pos_w[i, k] + up + pad
+            lo[i, k] = pos_w[i, k] - down - pad
 
 
 @njit_kernel
-def sweep_axis(lo, hi, is_plane):
-    """Axis (0, 1, 2) of greatest variance of the AABB centres of non-plane bodies."""
-    n = lo.shape[0]
-    best = 0
-    best_var = -1.0
-    for k in range(3):
-        m = 0
-        mean = 0.0
-        m2 = 0.0
-        for i in range(n):
-            if is_plane[i]:
-                continue
-            c = 0.5 * (lo[i, k] + hi[i, k])
-            m += 1
-            delta = c - mean
-            mean += delta / m
-            m2 += delta * (c - mean)
-        if m2 > best_var:
-            best_var = m2
-            best = k
-    return best
+def _spread3(v):
+    """The low 21 bits of v spread to every third bit (Morton interleaving)."""
+    v &= 0x1FFFFF
+    v = (v | (v << 32)) & 0x1F00000000FFFF
+    v = (v | (v << 16)) & 0x1F0000FF0000FF
+    v = (v | (v << 8)) & 0x100F00F00F00F00F
+    v = (v | (v << 4)) & 0x10C30C30C30C30C3
+    v = (v | (v << 2)) & 0x1249249249249249
+    return v
 
 
 @njit_kernel
-def warm_sort(key, order_prev):
-    """Permutation int64 (n,) sorting ``key`` float64 (n,) ascending.
-
-    If ``order_prev`` is a permutation of the same length it is the starting point of an
-    insertion sort (cheap when the order barely changed); past SORT_SWAP_CAP * n swaps,
-    or with no usable previous order, a merge-sort argsort is used.  Ties may end in any
-    order; callers must not depend on it (find_pairs sorts its output).
-    """
-    n = key.shape[0]
-    if order_prev.shape[0] == n and n > 0:
-        order = order_prev.copy()
-        swaps = 0
-        cap = SORT_SWAP_CAP * n
-        ok = True
-        for a in range(1, n):
-            item = order[a]
-            v = key[item]
-            b = a - 1
-            while b >= 0 and key[order[b]] > v:
-                order[b + 1] = order[b]
-                b -= 1
-                swaps += 1
-            order[b + 1] = item
-            if swaps > cap:
-                ok = False
-                break
-        if ok:
-            return order
-    return np.argsort(key, kind="mergesort").astype(np.int64)
+def _cell_hash(ix, iy, iz, mask, shift):
+    """Bucket of the integer cell (ix, iy, iz) in a table of mask + 1 = 2**shift
+    buckets: its Morton code folded onto ``shift`` bits, so that nearby cells get nearby
+    buckets (the scans stay in cache) while far-spread scenes still use every bucket;
+    distinct cells may share a bucket, entries carry their cell."""
+    code = _spread3(ix) | (_spread3(iy) << 1) | (_spread3(iz) << 2)
+    return (code ^ (code >> shift) ^ (code >> (2 * shift)) ^ (code >> (3 * shift))) & mask
 
 
 @njit_kernel
-def _sweep_row(r, order, slo, shi, axis, n, write, out, offsets):
-    """Pairs of the body at rank ``r`` with the bodies after it along the sweep axis.
-
-    ``slo``/``shi`` (m, 3) are the AABBs already gathered in sweep order (contiguous
-    reads); returns the count and, if ``write``, stores the pair keys min * n + max
-    from ``out[offsets[r]]``."""
-    m = order.shape[0]
-    a1 = (axis + 1) % 3
-    a2 = (axis + 2) % 3
-    c = 0
-    end = shi[r, axis]
-    lo1, hi1, lo2, hi2 = slo[r, a1], shi[r, a1], slo[r, a2], shi[r, a2]
-    base = offsets[r] if write else 0
-    if not write:
-        for t in range(r + 1, m):
-            if slo[t, axis] > end:
-                break
-            # branch-free test: overlaps are rare, so short-circuits mispredict
-            c += ((lo1 <= shi[t, a1]) & (slo[t, a1] <= hi1)
-                  & (lo2 <= shi[t, a2]) & (slo[t, a2] <= hi2))
-        return c
-    if offsets[r + 1] == base:       # the counting pass found none: skip the row
-        return 0
-    i = order[r]
-    for t in range(r + 1, m):
-        if slo[t, axis] > end:
-            break
-        if lo1 <= shi[t, a1] and slo[t, a1] <= hi1 and lo2 <= shi[t, a2] and slo[t, a2] <= hi2:
-            j = order[t]
-            out[base + c] = min(i, j) * n + max(i, j)
-            c += 1
-    return c
+def _cell_key(ix, iy, iz):
+    """One int64 per cell (each coordinate in [0, 2**21))."""
+    return (ix << 42) | (iy << 21) | iz
 
 
 @njit_parallel
-def _sweep_par(order, slo, shi, axis, n, counts, write, out, offsets):
-    for r in prange(order.shape[0]):
-        counts[r] = _sweep_row(r, order, slo, shi, axis, n, write, out, offsets)
+def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
+              e_body, e_key, e_cmin, e_box, n, counts, write, out, offsets):
+    """Pairs (i, j), i < j, of each body i = bodies[r] (see ``find_pairs``): its grid
+    neighbours through the shared cells, plus every big body; a big body's row tests
+    every later body.  Stores each row's count in ``counts[r]``; with ``write`` also
+    its keys i * n + j, ascending, from out[offsets[r]].  The entries of each bucket
+    (e_body rank, e_key cell, e_cmin (E, 3) the body's first cell, e_box (E, 6) its
+    AABB lo, hi) are copied in bucket order so that a scan reads contiguous memory.  (One loop body, no calls:
+    a call per row with a dozen array arguments costs ~0.3 us of reference counting.)
+    """
+    m = bodies.shape[0]
+    for q in prange(m):
+        r = order[q]      # rows in space-filling order (cache), each in its own slots
+        i = bodies[r]
+        c = 0
+        base = offsets[r] if write else 0
+        if write and offsets[r + 1] == base:
+            counts[r] = 0
+            continue
+        if is_big[r]:
+            for t in range(r + 1, m):
+                j = bodies[t]
+                if (lo[i, 0] <= hi[j, 0] and lo[j, 0] <= hi[i, 0] and lo[i, 1] <= hi[j, 1]
+                        and lo[j, 1] <= hi[i, 1] and lo[i, 2] <= hi[j, 2]
+                        and lo[j, 2] <= hi[i, 2]):
+                    if write:
+                        out[base + c] = i * n + j
+                    c += 1
+        else:
+            for b in range(big.shape[0]):
+                t = big[b]
+                if t <= r:
+                    continue
+                j = bodies[t]
+                if (lo[i, 0] <= hi[j, 0] and lo[j, 0] <= hi[i, 0] and lo[i, 1] <= hi[j, 1]
+                        and lo[j, 1] <= hi[i, 1] and lo[i, 2] <= hi[j, 2]
+                        and lo[j, 2] <= hi[i, 2]):
+                    if write:
+                        out[base + c] = i * n + j
+                    c += 1
+            x0, y0, z0 = cmin[r, 0], cmin[r, 1], cmin[r, 2]
+            lo0, lo1, lo2 = lo[i, 0], lo[i, 1], lo[i, 2]
+            hi0, hi1, hi2 = hi[i, 0], hi[i, 1], hi[i, 2]
+            for ix in range(x0, cmax[r, 0] + 1):
+                for iy in range(y0, cmax[r, 1] + 1):
+                    for iz in range(z0, cmax[r, 2] + 1):
+                        key = (ix << 42) | (iy << 21) | iz
+                        hb = _cell_hash(ix, iy, iz, mask, shift)
+                        for e in range(bucket_start[hb], bucket_start[hb + 1]):
+                            t = e_body[e]
+                            if t <= r or e_key[e] != key:
+                                continue
+                            # report the pair only in the cell of max(lo_i, lo_j)
+                            if ix != max(x0, e_cmin[e, 0]) or iy != max(y0, e_cmin[e, 1]) or (
+                                    iz != max(z0, e_cmin[e, 2])):
+                                continue
+                            if (lo0 <= e_box[e, 3] and e_box[e, 0] <= hi0
+                                    and lo1 <= e_box[e, 4] and e_box[e, 1] <= hi1
+                                    and lo2 <= e_box[e, 5] and e_box[e, 2] <= hi2):
+                                if write:
+                                    out[base + c] = i * n + bodies[t]
+                                c += 1
+            if write:
+                # the row's keys ascending (few per row: insertion sort)
+                for a in range(base + 1, base + c):
+                    v = out[a]
+                    d = a - 1
+                    while d >= base and out[d] > v:
+                        out[d + 1] = out[d]
+                        d -= 1
+                    out[d + 1] = v
+        counts[r] = c
 
 
 @njit_kernel
@@ -235,11 +283,12 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
 
     lo, hi float64 (N, 3): world AABBs (m) from ``world_aabbs``.
     is_plane bool (N,); plane_w float64 (N, 4): grown world half-spaces of the planes.
-    order_prev int64 (m,): the order returned by the previous call (or empty); used only
-        if ``axis_prev`` equals this step's sweep axis and m = number of non-planes.
+    order_prev int64 (m,): the order returned by the previous call (or empty): the
+        bodies are visited in it, which keeps memory accesses local; any permutation of
+        the m non-plane bodies' ranks is valid, anything else is ignored.  The result
+        does not depend on it.  axis_prev: unused (0 or -1).
     Returns (pairs int64 (P, 2) with i < j sorted lexicographically,
-             order int64 (m,): the sort permutation of the non-plane bodies taken in
-             index order, to pass back as ``order_prev``, axis int64: the sweep axis).
+             order int64 (m,) to pass back as ``order_prev``, 0).
     """
     n = lo.shape[0]
     n_planes = 0
@@ -258,32 +307,134 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
             bodies[a] = i
             a += 1
     m = bodies.shape[0]
-    axis = sweep_axis(lo, hi, is_plane)
-    key = np.empty(m)
+    # --- the grid: cell size from the mean largest extent, origin at the lowest corner
+    origin = np.full(3, np.inf)
+    top = np.full(3, -np.inf)
+    ext = 0.0
     for r in range(m):
-        key[r] = lo[bodies[r], axis]
-    if axis == axis_prev and order_prev.shape[0] == m:
-        # the previous order is over body ranks; turn it into positions in ``bodies``
-        warm = order_prev
-    else:
-        warm = np.empty(0, np.int64)
-    rank = warm_sort(key, warm)
-    order = np.empty(m, np.int64)
-    slo = np.empty((m, 3))
-    shi = np.empty((m, 3))
-    for r in range(m):
-        i = bodies[rank[r]]
-        order[r] = i
+        i = bodies[r]
+        e = 0.0
         for k in range(3):
-            slo[r, k] = lo[i, k]
-            shi[r, k] = hi[i, k]
+            origin[k] = min(origin[k], lo[i, k])
+            top[k] = max(top[k], hi[i, k])
+            e = max(e, hi[i, k] - lo[i, k])
+        ext += e
+    h = GRID_CELL_SCALE * ext / max(m, 1)
+    span = 0.0
+    for k in range(3):
+        span = max(span, top[k] - origin[k])
+    if not h > 0.0:
+        h = 1.0
+    if span / h > GRID_MAX_CELLS:
+        h = span / GRID_MAX_CELLS
+    cmin = np.empty((m, 3), np.int64)
+    cmax = np.empty((m, 3), np.int64)
+    is_big = np.zeros(m, np.bool_)
+    n_big = 0
+    n_entries = 0
+    for r in range(m):
+        i = bodies[r]
+        cells = 1
+        for k in range(3):
+            cmin[r, k] = np.int64(math.floor((lo[i, k] - origin[k]) / h))
+            cmax[r, k] = np.int64(math.floor((hi[i, k] - origin[k]) / h))
+            w = cmax[r, k] - cmin[r, k] + 1
+            if w > GRID_BIG_CELLS:
+                is_big[r] = True
+            cells *= w
+        if is_big[r]:
+            n_big += 1
+        else:
+            n_entries += cells
+    big = np.empty(n_big, np.int64)
+    n_big = 0
+    for r in range(m):
+        if is_big[r]:
+            big[n_big] = r
+            n_big += 1
+    size = 1
+    shift = 0
+    while size < n_entries:
+        size *= 2
+        shift += 1
+    shift = max(shift, 1)
+    mask = size - 1
+    # rows in the previous call's order if it is one (bodies barely move between steps,
+    # so it is still nearly space-filling), else in index order
+    order = np.empty(m, np.int64)
+    ok = order_prev.shape[0] == m
+    if ok:
+        seen = np.zeros(m, np.bool_)
+        for q in range(m):
+            r = order_prev[q]
+            if r < 0 or r >= m or seen[r]:
+                ok = False
+                break
+            seen[r] = True
+            order[q] = r
+    if not ok:
+        for q in range(m):
+            order[q] = q
+    bucket_start = np.zeros(size + 1, np.int64)
+    for q in range(m):
+        r = order[q]
+        if is_big[r]:
+            continue
+        for ix in range(cmin[r, 0], cmax[r, 0] + 1):
+            for iy in range(cmin[r, 1], cmax[r, 1] + 1):
+                for iz in range(cmin[r, 2], cmax[r, 2] + 1):
+                    bucket_start[_cell_hash(ix, iy, iz, mask, shift) + 1] += 1
+    for c in range(size):
+        bucket_start[c + 1] += bucket_start[c]
+    fill = bucket_start[:size].copy()
+    e_body = np.empty(n_entries, np.int64)
+    e_key = np.empty(n_entries, np.int64)
+    e_cmin = np.empty((n_entries, 3), np.int64)
+    e_box = np.empty((n_entries, 6))
+    for q in range(m):
+        r = order[q]
+        if is_big[r]:
+            continue
+        i = bodies[r]
+        for ix in range(cmin[r, 0], cmax[r, 0] + 1):
+            for iy in range(cmin[r, 1], cmax[r, 1] + 1):
+                for iz in range(cmin[r, 2], cmax[r, 2] + 1):
+                    hb = _cell_hash(ix, iy, iz, mask, shift)
+                    e = fill[hb]
+                    e_body[e] = r
+                    e_key[e] = _cell_key(ix, iy, iz)
+                    for k in range(3):
+                        e_cmin[e, k] = cmin[r, k]
+                        e_box[e, k] = lo[i, k]
+                        e_box[e, 3 + k] = hi[i, k]
+                    fill[hb] += 1
+    # the next call's row order: small bodies by the bucket of their first cell (Morton
+    # order), then the big ones
+    new_order = np.empty(m, np.int64)
+    q = 0
+    for e in range(n_entries):
+        r = e_body[e]
+        if e_key[e] == _cell_key(cmin[r, 0], cmin[r, 1], cmin[r, 2]):
+            new_order[q] = r
+            q += 1
+    for b in range(n_big):
+        new_order[q] = big[b]
+        q += 1
+    # --- body pairs: count per row, then write each row's keys sorted in its slot
     counts = np.zeros(m, np.int64)
-    dummy = np.empty(0, np.int64)
     offsets = np.zeros(m + 1, np.int64)
-    _sweep_par(order, slo, shi, axis, n, counts, False, dummy, offsets)
+    dummy = np.empty(0, np.int64)
+    _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
+              e_body, e_key, e_cmin, e_box, n, counts, False, dummy, offsets)
     for r in range(m):
         offsets[r + 1] = offsets[r] + counts[r]
     n_body_pairs = offsets[m]
+    body_keys = np.empty(n_body_pairs, np.int64)
+    if n_body_pairs > 0:
+        _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift,
+                  bucket_start, e_body, e_key, e_cmin, e_box, n, counts, True, body_keys,
+                  offsets)
+    # --- planes against every body reaching their half-space
     hit = np.zeros((n_planes, m), np.bool_)
     if n_planes > 0 and m > 0:
         _plane_par(planes, bodies, lo, hi, plane_w, hit)
@@ -292,20 +443,88 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
         for r in range(m):
             if hit[q, r]:
                 n_plane_pairs += 1
-    keys = np.empty(n_body_pairs + n_plane_pairs, np.int64)
-    if n_body_pairs > 0:
-        _sweep_par(order, slo, shi, axis, n, counts, True, keys, offsets)
-    t = n_body_pairs
+    plane_keys = np.empty(n_plane_pairs, np.int64)
+    t = 0
     for q in range(n_planes):
         p = planes[q]
         for r in range(m):
             if hit[q, r]:
                 i = bodies[r]
-                keys[t] = min(i, p) * n + max(i, p)
+                plane_keys[t] = min(i, p) * n + max(i, p)
                 t += 1
-    keys.sort()
+    if n_planes > 1 or (n_planes == 1 and planes[0] < n - 1):
+        plane_keys.sort()
+    # --- merge the two sorted key lists
+    keys = np.empty(n_body_pairs + n_plane_pairs, np.int64)
+    x = 0
+    y = 0
+    for t in range(keys.shape[0]):
+        if y >= n_plane_pairs or (x < n_body_pairs and body_keys[x] < plane_keys[y]):
+            keys[t] = body_keys[x]
+            x += 1
+        else:
+            keys[t] = plane_keys[y]
+            y += 1
     pairs = np.empty((keys.shape[0], 2), np.int64)
     for t in range(keys.shape[0]):
         pairs[t, 0] = keys[t] // n
         pairs[t, 1] = keys[t] % n
-    return pairs, rank, axis
+    return pairs, new_order, np.int64(0)
+
+
+@njit_kernel
+def normalise_poses(pos_w, quat_w, quat_out):
+    """Check and normalise N poses in one pass.
+
+    pos_w float64 (N, 3) m; quat_w float64 (N, 4) xyzw of any non-zero norm;
+    quat_out float64 (N, 4) out: the unit quaternions.
+    Returns (body, why): the first bad body and 1 non-finite position, 2 non-finite
+    quaternion, 3 zero quaternion (norm <= 1e-12); (-1, 0) when all are good.
+    """
+    for i in range(pos_w.shape[0]):
+        for k in range(3):
+            if not math.isfinite(pos_w[i, k]):
+                return i, 1
+        s = 0.0
+        for k in range(4):
+            v = quat_w[i, k]
+            if not math.isfinite(v):
+                return i, 2
+            s += v * v
+        nrm = math.sqrt(s)
+        if not nrm > 1e-12:
+            return i, 3
+        for k in range(4):
+            quat_out[i, k] = quat_w[i, k] / nrm
+    return -1, 0
+
+
+@njit_kernel
+def filter_pairs(pairs, static, group, mask, allowed, n_bodies):
+    """The pairs int64 (P, 2) that may collide: not both ``static`` (bool (N,)),
+    ``(group[i] & mask[j]) != 0 and (group[j] & mask[i]) != 0`` (int64 (N,)), and
+    key ``i * n_bodies + j`` not in ``allowed`` (int64 (K,), sorted).  Returns int64
+    (Q, 2), in the input's order."""
+    keep = np.empty(pairs.shape[0], np.bool_)
+    q = 0
+    na = allowed.shape[0]
+    for r in range(pairs.shape[0]):
+        i = pairs[r, 0]
+        j = pairs[r, 1]
+        ok = (not (static[i] and static[j])) and (group[i] & mask[j]) != 0 and (
+            group[j] & mask[i]) != 0
+        if ok and na > 0:
+            key = i * n_bodies + j
+            t = np.searchsorted(allowed, key)
+            if t < na and allowed[t] == key:
+                ok = False
+        keep[r] = ok
+        q += ok
+    out = np.empty((q, 2), np.int64)
+    q = 0
+    for r in range(pairs.shape[0]):
+        if keep[r]:
+            out[q, 0] = pairs[r, 0]
+            out[q, 1] = pairs[r, 1]
+            q += 1
+    return out

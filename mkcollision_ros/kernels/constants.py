@@ -43,6 +43,9 @@ METHOD_NAMES = ("auto", "gjk_epa", "mpr", "analytic", "ellipsoid_exact", "ellips
 # tolerance is reported as TOUCHING, below it PENETRATING, above it SEPARATED.
 TOUCH_TOL = 1e-9
 
+# --- batch kernel ------------------------------------------------------------------------
+NP_CHUNK = 32              # pairs per chunk of collide_batch (one scratch workspace each)
+
 # --- GJK ---------------------------------------------------------------------------------
 GJK_MAX_ITERS = 128        # iterations (support evaluations)
 GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimensionless)
@@ -50,7 +53,7 @@ GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimen
 # --- EPA ---------------------------------------------------------------------------------
 EPA_MAX_ITERS = 255        # added vertices
 EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
-EPA_REL_TOL = 1e-10        # stop when support gain < tol * scale (dimensionless)
+EPA_REL_TOL = 1e-8         # stop when support gain < tol * scale (dimensionless)
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

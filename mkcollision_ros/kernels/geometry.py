@@ -27,10 +27,10 @@ from .jit import njit_kernel
 
 
 @njit_kernel
-def quat_to_matrix(q):
-    """Rotation matrix (3, 3) of a unit quaternion ``q`` = (x, y, z, w), float64."""
+def quat_to_matrix_into(q, r):
+    """Write the rotation matrix of a unit quaternion ``q`` = (x, y, z, w) into ``r``
+    (3, 3) float64 (allocation-free variant of ``quat_to_matrix``)."""
     x, y, z, w = q[0], q[1], q[2], q[3]
-    r = np.empty((3, 3))
     r[0, 0] = 1.0 - 2.0 * (y * y + z * z)
     r[0, 1] = 2.0 * (x * y - z * w)
     r[0, 2] = 2.0 * (x * z + y * w)
@@ -40,6 +40,13 @@ def quat_to_matrix(q):
     r[2, 0] = 2.0 * (x * z - y * w)
     r[2, 1] = 2.0 * (y * z + x * w)
     r[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@njit_kernel
+def quat_to_matrix(q):
+    """Rotation matrix (3, 3) of a unit quaternion ``q`` = (x, y, z, w), float64."""
+    r = np.empty((3, 3))
+    quat_to_matrix_into(q, r)
     return r
 
 
@@ -67,44 +74,31 @@ def inflation(code, prm):
 
 
 @njit_kernel
-def support_core(code, prm, verts, v0, vn, d, out):
-    """Write into ``out`` (3,) the point of the shape's core farthest along the
-    direction ``d`` (3,), both in the body frame.  ``d`` need not be unit."""
-    dx, dy, dz = d[0], d[1], d[2]
+def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
+    """Point (x, y, z) of the shape's core farthest along the direction (dx, dy, dz),
+    both in the body frame; the direction need not be unit.  Allocation-free (scalars
+    stay in registers); ``support_core`` writes the same point into an array."""
     if code == SPHERE:
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = 0.0
+        return 0.0, 0.0, 0.0
     elif code == ELLIPSOID:
         a, b, c = prm[0], prm[1], prm[2]
         ex, ey, ez = a * a * dx, b * b * dy, c * c * dz
         n = math.sqrt(ex * dx + ey * dy + ez * dz)
         if n > 0.0:
-            out[0] = ex / n
-            out[1] = ey / n
-            out[2] = ez / n
-        else:
-            out[0] = a
-            out[1] = 0.0
-            out[2] = 0.0
+            return ex / n, ey / n, ez / n
+        return a, 0.0, 0.0
     elif code == BOX:
-        out[0] = prm[0] if dx >= 0.0 else -prm[0]
-        out[1] = prm[1] if dy >= 0.0 else -prm[1]
-        out[2] = prm[2] if dz >= 0.0 else -prm[2]
+        return (prm[0] if dx >= 0.0 else -prm[0], prm[1] if dy >= 0.0 else -prm[1],
+                prm[2] if dz >= 0.0 else -prm[2])
     elif code == CAPSULE:
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = prm[1] if dz >= 0.0 else -prm[1]
+        return 0.0, 0.0, (prm[1] if dz >= 0.0 else -prm[1])
     elif code == CYLINDER:
         r, h = prm[0], prm[1]
         s = math.sqrt(dx * dx + dy * dy)
+        z = h if dz >= 0.0 else -h
         if s > 0.0:
-            out[0] = r * dx / s
-            out[1] = r * dy / s
-        else:
-            out[0] = r
-            out[1] = 0.0
-        out[2] = h if dz >= 0.0 else -h
+            return r * dx / s, r * dy / s, z
+        return r, 0.0, z
     elif code == CONE:
         r, h = prm[0], prm[1]
         s = math.sqrt(dx * dx + dy * dy)
@@ -114,13 +108,8 @@ def support_core(code, prm, verts, v0, vn, d, out):
             bx, by = r, 0.0
         # tip (0, 0, h) against the best rim point (bx, by, -h)
         if dz * h >= dx * bx + dy * by - dz * h:
-            out[0] = 0.0
-            out[1] = 0.0
-            out[2] = h
-        else:
-            out[0] = bx
-            out[1] = by
-            out[2] = -h
+            return 0.0, 0.0, h
+        return bx, by, -h
     elif code == CONVEX:
         best = -np.inf
         k = v0
@@ -129,26 +118,43 @@ def support_core(code, prm, verts, v0, vn, d, out):
             if v > best:
                 best = v
                 k = i
-        out[0] = verts[k, 0]
-        out[1] = verts[k, 1]
-        out[2] = verts[k, 2]
-    else:  # PLANE has no support point; callers route planes to the half-space path
-        out[0] = 0.0
-        out[1] = 0.0
-        out[2] = 0.0
+        return verts[k, 0], verts[k, 1], verts[k, 2]
+    # PLANE has no support point; callers route planes to the half-space path
+    return 0.0, 0.0, 0.0
+
+
+@njit_kernel
+def support_full_xyz(code, prm, verts, v0, vn, dx, dy, dz):
+    """Support point (x, y, z) (body frame) of the whole shape along (dx, dy, dz): core
+    plus inflation.  Allocation-free variant of ``support_full``."""
+    x, y, z = support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz)
+    rad = inflation(code, prm)
+    if rad > 0.0:
+        n = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if n > 0.0:
+            x += rad * dx / n
+            y += rad * dy / n
+            z += rad * dz / n
+    return x, y, z
+
+
+@njit_kernel
+def support_core(code, prm, verts, v0, vn, d, out):
+    """Write into ``out`` (3,) the point of the shape's core farthest along the
+    direction ``d`` (3,), both in the body frame.  ``d`` need not be unit."""
+    x, y, z = support_core_xyz(code, prm, verts, v0, vn, d[0], d[1], d[2])
+    out[0] = x
+    out[1] = y
+    out[2] = z
 
 
 @njit_kernel
 def support_full(code, prm, verts, v0, vn, d, out):
     """Support point (body frame) of the whole shape: core plus inflation along ``d``."""
-    support_core(code, prm, verts, v0, vn, d, out)
-    rad = inflation(code, prm)
-    if rad > 0.0:
-        n = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-        if n > 0.0:
-            out[0] += rad * d[0] / n
-            out[1] += rad * d[1] / n
-            out[2] += rad * d[2] / n
+    x, y, z = support_full_xyz(code, prm, verts, v0, vn, d[0], d[1], d[2])
+    out[0] = x
+    out[1] = y
+    out[2] = z
 
 
 @njit_kernel
@@ -183,18 +189,39 @@ def minkowski_support(sa, sb, verts, r_ab, t_ab, d, core, wa, wb, w):
     Writes the support point of A into ``wa``, that of B (in A's frame) into ``wb`` and
     their difference into ``w``, each float64 (3,).
     """
-    db = np.empty(3)
     # direction -d seen from B's frame: r_ab^T (-d)
-    for i in range(3):
-        db[i] = -(r_ab[0, i] * d[0] + r_ab[1, i] * d[1] + r_ab[2, i] * d[2])
-    sb_local = np.empty(3)
+    dx = -(r_ab[0, 0] * d[0] + r_ab[1, 0] * d[1] + r_ab[2, 0] * d[2])
+    dy = -(r_ab[0, 1] * d[0] + r_ab[1, 1] * d[1] + r_ab[2, 1] * d[2])
+    dz = -(r_ab[0, 2] * d[0] + r_ab[1, 2] * d[1] + r_ab[2, 2] * d[2])
     if core:
-        support_core(sa[0], sa[1], verts, sa[2], sa[3], d, wa)
-        support_core(sb[0], sb[1], verts, sb[2], sb[3], db, sb_local)
+        ax, ay, az = support_core_xyz(sa[0], sa[1], verts, sa[2], sa[3], d[0], d[1], d[2])
+        bx, by, bz = support_core_xyz(sb[0], sb[1], verts, sb[2], sb[3], dx, dy, dz)
     else:
-        support_full(sa[0], sa[1], verts, sa[2], sa[3], d, wa)
-        support_full(sb[0], sb[1], verts, sb[2], sb[3], db, sb_local)
+        ax, ay, az = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], d[0], d[1], d[2])
+        bx, by, bz = support_full_xyz(sb[0], sb[1], verts, sb[2], sb[3], dx, dy, dz)
+    wa[0] = ax
+    wa[1] = ay
+    wa[2] = az
     for i in range(3):
-        wb[i] = (r_ab[i, 0] * sb_local[0] + r_ab[i, 1] * sb_local[1]
-                 + r_ab[i, 2] * sb_local[2] + t_ab[i])
+        wb[i] = r_ab[i, 0] * bx + r_ab[i, 1] * by + r_ab[i, 2] * bz + t_ab[i]
         w[i] = wa[i] - wb[i]
+
+
+@njit_kernel
+def minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core):
+    """Allocation-free ``minkowski_support``: for the direction (dx, dy, dz) in A's
+    frame returns the support points of A and of B (both in A's frame) as six floats
+    (ax, ay, az, bx, by, bz); the Minkowski difference point is a - b."""
+    ex = -(r_ab[0, 0] * dx + r_ab[1, 0] * dy + r_ab[2, 0] * dz)
+    ey = -(r_ab[0, 1] * dx + r_ab[1, 1] * dy + r_ab[2, 1] * dz)
+    ez = -(r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz)
+    if core:
+        ax, ay, az = support_core_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
+        px, py, pz = support_core_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
+    else:
+        ax, ay, az = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
+        px, py, pz = support_full_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
+    bx = r_ab[0, 0] * px + r_ab[0, 1] * py + r_ab[0, 2] * pz + t_ab[0]
+    by = r_ab[1, 0] * px + r_ab[1, 1] * py + r_ab[1, 2] * pz + t_ab[1]
+    bz = r_ab[2, 0] * px + r_ab[2, 1] * py + r_ab[2, 2] * pz + t_ab[2]
+    return ax, ay, az, bx, by, bz

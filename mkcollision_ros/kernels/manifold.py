@@ -41,11 +41,12 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, OUT_DIST, OUT_NORMAL,
-                        OUT_PA, OUT_PB, P_MARGIN, P_RADIUS, PLANE, ST_PENETRATING,
-                        ST_TOUCHING)
-from .geometry import inflation, quat_to_matrix
+from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, OUT_DIST,
+                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, P_MARGIN, P_RADIUS, PLANE,
+                        ST_PENETRATING, ST_SEPARATED, ST_TOUCHING)
+from .geometry import inflation, quat_to_matrix_into
 from .jit import njit_kernel, njit_parallel, prange
+
 
 MAX_FEATURE = 8          # points of a supporting feature (cylinder cap as an 8-gon)
 MAX_MANIFOLD = 16        # clipped points of one pair (<= 2 * MAX_FEATURE)
@@ -53,6 +54,7 @@ CAP_SIDES = 8            # polygon approximating a cylinder / cone cap
 FACE_SIN = 0.05          # sin of the angle (~2.9 deg) within which a cap / side is a face
 FACE_SLACK = 0.05        # convex hull face tolerance, relative to the hull's diameter
 REF_COS = 0.9            # the reference face normal must be within ~26 deg of n
+MANIFOLD_CHUNK = 32      # rows of manifold_batch sharing one scratch workspace
 
 
 @njit_kernel
@@ -265,15 +267,15 @@ def _single(row, cpts_k, cn_k):
 
 @njit_kernel
 def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, keep_dist,
-                   cpts_k, cn_k):
-    n = row[OUT_NORMAL:OUT_NORMAL + 3].copy()
+                   cpts_k, cn_k, ws):
     ca, cb = codes[ia], codes[ib]
-    ra = quat_to_matrix(quat_w[ia])
-    rb = quat_to_matrix(quat_w[ib])
-    fa = np.zeros((MAX_FEATURE, 3))
-    fb = np.zeros((MAX_FEATURE, 3))
-    fna = np.zeros(3)
-    fnb = np.zeros(3)
+    if ca <= ELLIPSOID or cb <= ELLIPSOID:
+        # a sphere or an ellipsoid only ever presents one point
+        return _single(row, cpts_k, cn_k)
+    ra, rb, fa, fb, fna, fnb, ref_pts, inc_pts, buf0, buf1 = ws
+    n = row[OUT_NORMAL:OUT_NORMAL + 3].copy()
+    quat_to_matrix_into(quat_w[ia], ra)
+    quat_to_matrix_into(quat_w[ib], rb)
     na = 0
     nb = 0
     if ca != PLANE:
@@ -282,8 +284,6 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
         nb = _feature(cb, params[ib], verts, vrange[ib, 0], vrange[ib, 1], -_mtv(rb, n), fb, fnb)
     # reference face: point, outward normal (world); which side is the reference
     ref_is_a = True
-    ref_pts = np.zeros((MAX_FEATURE, 3))
-    inc_pts = np.zeros((MAX_FEATURE, 3))
     n_ref = np.zeros(3)
     nr = 0
     ni = 0
@@ -327,8 +327,6 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
     if ni < 2 or nr == 0 or nr == 1:
         return _single(row, cpts_k, cn_k)
     # clip the incident polygon by the reference face's side planes
-    buf0 = np.zeros((MAX_MANIFOLD, 3))
-    buf1 = np.zeros((MAX_MANIFOLD, 3))
     for c in range(ni):
         buf0[c] = inc_pts[c]
     cnt = ni
@@ -390,14 +388,11 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
 
 
 @njit_kernel
-def _manifold_row(k, codes, params, vrange, verts, pairs, pos_w, quat_w, out, status,
-                  keep_dist, cpts, cnormal, ccount):
-    st = status[k]
-    if st != ST_TOUCHING and st != ST_PENETRATING:
-        ccount[k] = 0
-        return
-    c = _pair_manifold(codes, params, vrange, verts, pairs[k, 0], pairs[k, 1], pos_w,
-                       quat_w, out[k], keep_dist, cpts[k], cnormal[k])
+def _manifold_row(k, codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                  keep_dist, cpts, cnormal, ccount, ws):
+    r = rows[k]
+    c = _pair_manifold(codes, params, vrange, verts, pairs[r, 0], pairs[r, 1], pos_w,
+                       quat_w, out[r], keep_dist, cpts[k], cnormal[k], ws)
     # never hand on non-finite numbers: fall back to the narrow phase's point
     ok = True
     for q in range(c):
@@ -405,27 +400,92 @@ def _manifold_row(k, codes, params, vrange, verts, pairs, pos_w, quat_w, out, st
             if not math.isfinite(cpts[k, q, i]):
                 ok = False
     if not ok:
-        c = _single(out[k], cpts[k], cnormal[k])
+        c = _single(out[r], cpts[k], cnormal[k])
     ccount[k] = c
 
 
+@njit_kernel
+def _workspace():
+    return (np.empty((3, 3)), np.empty((3, 3)), np.zeros((MAX_FEATURE, 3)),
+            np.zeros((MAX_FEATURE, 3)), np.zeros(3), np.zeros(3),
+            np.zeros((MAX_FEATURE, 3)), np.zeros((MAX_FEATURE, 3)),
+            np.zeros((MAX_MANIFOLD, 3)), np.zeros((MAX_MANIFOLD, 3)))
+
+
 @njit_parallel
-def manifold_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, out, status,
+def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
                    keep_dist, cpts, cnormal, ccount):
-    """Contact manifolds of P pairs.
+    """Contact manifolds of the touching pairs ``pairs[rows]``.
 
     codes, params, vrange, verts: the shape table (body frames, m).
-    pairs int64 (P, 2); pos_w float64 (N, 3) m; quat_w float64 (N, 4) unit xyzw.
-    out float64 (P, OUT_SIZE), status int64 (P,): the narrow phase's world rows.
+    pairs int64 (P, 2); rows int64 (T,): the rows of ``pairs`` / ``out`` to run, each a
+        touching or penetrating pair; pos_w float64 (N, 3) m; quat_w float64 (N, 4)
+        unit xyzw.
+    out float64 (P, OUT_SIZE): the narrow phase's world rows.
     keep_dist float64 (m): clipped points up to this far outside the reference face
         are kept (speculative contacts, distance > 0).
-    cpts float64 (P, MAX_MANIFOLD, 7) out: world point_a (3), point_b (3), distance.
-    cnormal float64 (P, 3) out: unit normal A -> B, world.
-    ccount int64 (P,) out: contacts of the pair (0 when not touching).
+    cpts float64 (>= T, MAX_MANIFOLD, 7) out: world point_a (3), point_b (3), distance.
+    cnormal float64 (>= T, 3) out: unit normal A -> B, world.
+    ccount int64 (>= T,) out: contacts of the pair (>= 1).
+    Row k of the outputs is pair ``rows[k]``; rows run in chunks of MANIFOLD_CHUNK with
+    one scratch workspace each, every row writes only its own slots: deterministic for
+    any thread count.
     """
-    for k in prange(pairs.shape[0]):
-        _manifold_row(k, codes, params, vrange, verts, pairs, pos_w, quat_w, out, status,
-                      keep_dist, cpts, cnormal, ccount)
+    n_rows = rows.shape[0]
+    n_chunks = (n_rows + MANIFOLD_CHUNK - 1) // MANIFOLD_CHUNK
+    for ch in prange(n_chunks):
+        ws = _workspace()
+        for k in range(ch * MANIFOLD_CHUNK, min(n_rows, (ch + 1) * MANIFOLD_CHUNK)):
+            r = rows[k]
+            if codes[pairs[r, 0]] <= ELLIPSOID or codes[pairs[r, 1]] <= ELLIPSOID:
+                # a sphere or an ellipsoid presents one point: the narrow phase's (inline,
+                # as a call with array arguments costs more than the copy)
+                for i in range(3):
+                    cpts[k, 0, i] = out[r, OUT_PA + i]
+                    cpts[k, 0, 3 + i] = out[r, OUT_PB + i]
+                    cnormal[k, i] = out[r, OUT_NORMAL + i]
+                cpts[k, 0, 6] = out[r, OUT_DIST]
+                ccount[k] = 1
+                continue
+            _manifold_row(k, codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                          keep_dist, cpts, cnormal, ccount, ws)
+
+
+@njit_kernel
+def split_pairs(pairs, out, status, n_bodies, st_failed, t_rows, t_keys, t_status,
+                t_method, u_rows, u_keys, u_status, u_method):
+    """Sort the narrow phase's pairs (P rows, ``pairs`` int64 (P, 2) sorted, ``out``
+    float64 (P, OUT_SIZE), ``status`` int64 (P,)) into touching and undecided ones.
+
+    A row with a non-finite number is a failure whatever its status says: its status
+    is set to ``st_failed`` in place.  Touching / penetrating rows go to ``t_*``, failed
+    / not-run rows to ``u_*`` (each int64 (>= P,)): the row index, the key
+    ``a * n_bodies + b`` (sorted, as the pairs are), the status and the method code.
+    Returns (T, U).
+    """
+    nt = 0
+    nu = 0
+    for r in range(pairs.shape[0]):
+        st = status[r]
+        for c in range(out.shape[1]):
+            if not math.isfinite(out[r, c]):
+                st = st_failed
+                status[r] = st
+                break
+        key = pairs[r, 0] * n_bodies + pairs[r, 1]
+        if st == ST_TOUCHING or st == ST_PENETRATING:
+            t_rows[nt] = r
+            t_keys[nt] = key
+            t_status[nt] = st
+            t_method[nt] = np.int64(out[r, OUT_METHOD])
+            nt += 1
+        elif st != ST_SEPARATED:
+            u_rows[nu] = r
+            u_keys[nu] = key
+            u_status[nu] = st
+            u_method[nu] = np.int64(out[r, OUT_METHOD])
+            nu += 1
+    return nt, nu
 
 
 # --- persistence: matching new contacts to stored ones (the arbiters' kernel) ----------
@@ -536,32 +596,54 @@ def _reduce(mid, depth, rank, n, m, k, keep):
 
 
 @njit_kernel
-def persist_batch(arb_a, arb_b, arb_src, arb_row, o_id, o_age, o_la, o_lb, o_na,
-                  cpts, cnormal, ccount, pos_w, quat_w, merge_distance, drift_threshold,
-                  max_contacts, next_id, n_id, n_age, n_la, n_lb, n_na, n_pa, n_pb, n_n,
-                  n_count, ev_arb, ev_kind, ev_id):
-    """Persistent contacts of A arbiters for one step (serial: ids are handed out in
-    arbiter order, so they are deterministic).
+def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, out_arb,
+                 out_con, out_ev):
+    """All arbiters of a scene for one step, in one serial pass (ids are handed out in
+    key order, so they are deterministic).  Keys are ``a * n_bodies + b`` with a < b.
 
-    arb_a, arb_b int64 (A,): bodies (a < b); arb_src int64 (A, 2): [start, end) of the
-        arbiter's stored contacts in the ``o_*`` arrays; arb_row int64 (A,): its row in
-        ``cpts``/``cnormal``/``ccount`` (the manifold of this step), -1 if the narrow
-        phase did not confirm it this step (stored contacts are then only refreshed).
-    o_id, o_age int64 (S,); o_la, o_lb, o_na float64 (S, 3): stored contacts, points in
-        A's / B's body frame (m), normal in A's frame.
-    cpts float64 (T, MAX_MANIFOLD, 7), cnormal (T, 3), ccount int64 (T,): manifolds
-        (world point_a, point_b, distance), see ``manifold_batch``.
-    pos_w (N, 3), quat_w (N, 4) unit xyzw; merge_distance, drift_threshold (m);
-    max_contacts >= 1; next_id: the first id to hand out.
-    Outputs, A * max_contacts rows laid out per arbiter at a * max_contacts:
-        n_id, n_age, n_la, n_lb, n_na (as o_*), n_pa, n_pb, n_n (world, m) and
-        n_count int64 (A,) contacts kept per arbiter;
-    events, at most S + T * MAX_MANIFOLD rows: ev_arb (arbiter index), ev_kind
-        (EV_BEGAN / EV_PERSISTED / EV_ENDED), ev_id (contact id), per arbiter by id.
-    Returns (next_id, number of events).
+    old: the state of the previous step, a tuple
+        (keys int64 (A,) sorted, unconfirmed int64 (A,) steps without confirmation,
+         start int64 (A + 1,) arbiter k's stored contacts are rows [start[k], start[k+1])
+         of: id int64 (S,), age int64 (S,), la, lb float64 (S, 3) points in A's / B's
+         body frame (m), na float64 (S, 3) normal in A's frame).
+    new: the touching pairs of this step, a tuple
+        (tkeys int64 (T,) sorted, t_status int64 (T,), t_method int64 (T,),
+         cpts float64 (>= T, MAX_MANIFOLD, 7), cnormal float64 (>= T, 3),
+         ccount int64 (>= T,): manifolds, see ``manifold_batch``).
+    unconf: pairs the narrow phase could not decide, a tuple
+        (ukeys int64 (U,) sorted, u_status int64 (U,), u_method int64 (U,)).
+    pos_w (N, 3) m, quat_w (N, 4) unit xyzw: this step's poses.
+    settings: (merge_distance m, drift_threshold m, max_contacts int, stale_steps int).
+    next_id: the first contact id to hand out.
+    out_arb: (keys, unconfirmed int64 (>= A + T,), start int64 (>= A + T + 1,),
+        pairs int64 (>= A + T, 2)) - the new state, arbiter rows.
+    out_con: (body_a, body_b, id, age int64, la, lb, na, point_a, point_b, normal
+        float64 (., 3), depth float64, status, method int64), at least
+        (A + T) * max_contacts rows: the new contacts, by pair then id; point_a, point_b,
+        normal in the world (m), depth >= 0 (m), status / method the pair's this step.
+    out_ev: (kind int64 (EV_*), body_a, body_b, id int64), at least
+        (A + T) * (1 + max_contacts) + S + T * MAX_MANIFOLD rows: events by pair, the
+        pair's event (id -1) first, then its contacts' by id.
+    Returns (arbiters, contacts, events, next_id).
     """
-    n_ev = 0
+    o_keys, o_unc, o_start, o_id, o_age, o_la, o_lb, o_na = old
+    tkeys, t_status, t_method, cpts, cnormal, ccount = new
+    ukeys, u_status, u_method = unconf
+    merge_distance, drift_threshold, max_contacts, stale_steps = settings
+    a_keys, a_unc, a_start, a_pairs = out_arb
+    (c_a, c_b, c_id, c_age, c_la, c_lb, c_na, c_pa, c_pb, c_n, c_depth, c_status,
+     c_method) = out_con
+    ev_kind, ev_a, ev_b, ev_id = out_ev
+    # scratch of one arbiter (plain locals: tuples of arrays unpacked in the loop would
+    # cost ~1 us of reference counting per arbiter)
     cap = MAX_MANIFOLD + 2 * max_contacts + 8
+    ra = np.empty((3, 3))
+    rb = np.empty((3, 3))
+    spa = np.empty((cap, 3))
+    spb = np.empty((cap, 3))
+    sn = np.empty((cap, 3))
+    sid = np.empty(cap, np.int64)
+    sage = np.empty(cap, np.int64)
     pa = np.empty((cap, 3))
     pb = np.empty((cap, 3))
     nn = np.empty((cap, 3))
@@ -571,160 +653,246 @@ def persist_batch(arb_a, arb_b, arb_src, arb_row, o_id, o_age, o_la, o_lb, o_na,
     depth = np.empty(cap)
     mid = np.empty((cap, 3))
     keep = np.empty(cap, np.int64)
-    ev_tmp_id = np.empty(2 * cap, np.int64)
-    ev_tmp_kind = np.empty(2 * cap, np.int64)
-    for a in range(arb_a.shape[0]):
-        ia = arb_a[a]
-        ib = arb_b[a]
-        ra = quat_to_matrix(quat_w[ia])
-        rb = quat_to_matrix(quat_w[ib])
-        ne = 0
-        # 1. stored contacts in the world; drop the drifted ones
-        s0 = arb_src[a, 0]
-        s1 = arb_src[a, 1]
-        m_old = 0
-        spa = np.empty((max(s1 - s0, 1), 3))
-        spb = np.empty((max(s1 - s0, 1), 3))
-        sn = np.empty((max(s1 - s0, 1), 3))
-        sid = np.empty(max(s1 - s0, 1), np.int64)
-        sage = np.empty(max(s1 - s0, 1), np.int64)
-        for s in range(s0, s1):
-            wa = _mv(ra, o_la[s]) + pos_w[ia]
-            wb = _mv(rb, o_lb[s]) + pos_w[ib]
-            wn = _mv(ra, o_na[s])
-            gap = wb - wa
-            along = _dot(gap, wn)
-            side = gap - along * wn
-            if along <= drift_threshold and math.sqrt(_dot(side, side)) <= drift_threshold:
-                spa[m_old] = wa
-                spb[m_old] = wb
-                sn[m_old] = wn
+    match_new = np.empty(cap, np.int64)
+    used_old = np.empty(cap, np.bool_)
+    t_id = np.empty(2 * cap, np.int64)
+    t_kind = np.empty(2 * cap, np.int64)
+    n_old = o_keys.shape[0]
+    n_t = tkeys.shape[0]
+    n_u = ukeys.shape[0]
+    io = 0
+    it = 0
+    iu = 0
+    na = 0
+    nc = 0
+    ne = 0
+    a_start[0] = 0
+    while io < n_old or it < n_t:
+        # the next key of the union of the old and the touching keys
+        if it >= n_t or (io < n_old and o_keys[io] < tkeys[it]):
+            key = o_keys[io]
+        else:
+            key = tkeys[it]
+        has_old = io < n_old and o_keys[io] == key
+        has_t = it < n_t and tkeys[it] == key
+        ia = key // n_bodies
+        ib = key % n_bodies
+        s0 = o_start[io] if has_old else 0
+        s1 = o_start[io + 1] if has_old else 0
+        row = -1
+        status = 0
+        method = 0
+        alive = True
+        kind = EV_PERSISTED
+        if has_t:
+            row = it
+            unc = 0
+            status = t_status[it]
+            method = t_method[it]
+            if not has_old:
+                kind = EV_BEGAN
+        else:
+            while iu < n_u and ukeys[iu] < key:
+                iu += 1
+            unc = o_unc[io] + 1
+            if iu < n_u and ukeys[iu] == key and unc < stale_steps:
+                status = u_status[iu]
+                method = u_method[iu]
+            else:
+                alive = False
+        ev_a[ne] = ia
+        ev_b[ne] = ib
+        ev_id[ne] = -1
+        if alive:
+            ev_kind[ne] = kind
+            ne += 1
+            quat_to_matrix_into(quat_w[ia], ra)
+            quat_to_matrix_into(quat_w[ib], rb)
+            te = 0
+            # 1. stored contacts in the world
+            m_old = 0
+            for s in range(s0, s1):
+                for i in range(3):
+                    spa[m_old, i] = (pos_w[ia, i] + ra[i, 0] * o_la[s, 0] + ra[i, 1] * o_la[s, 1]
+                                     + ra[i, 2] * o_la[s, 2])
+                    spb[m_old, i] = (pos_w[ib, i] + rb[i, 0] * o_lb[s, 0] + rb[i, 1] * o_lb[s, 1]
+                                     + rb[i, 2] * o_lb[s, 2])
+                    sn[m_old, i] = ra[i, 0] * o_na[s, 0] + ra[i, 1] * o_na[s, 1] + ra[i, 2] * o_na[s, 2]
                 sid[m_old] = o_id[s]
                 sage[m_old] = o_age[s] + 1
+                used_old[m_old] = False
                 m_old += 1
-            else:
-                ev_tmp_id[ne] = o_id[s]
-                ev_tmp_kind[ne] = EV_ENDED
-                ne += 1
-        # 2. match this step's contacts to the stored ones, closest pairs first
-        row = arb_row[a]
-        m_new = ccount[row] if row >= 0 else 0
-        match_new = np.full(max(m_new, 1), -1, np.int64)
-        used_old = np.zeros(max(m_old, 1), np.bool_)
-        while True:
-            bi = -1
-            bj = -1
-            bd = np.inf
+            # 2. match this step's contacts to the stored ones, closest pairs first (before the
+            #    drift rule: a sliding or spinning body moves its stored point on one body, but
+            #    the new point is still where the stored one is on the other body)
+            m_new = ccount[row] if row >= 0 else 0
             for i in range(m_new):
-                if match_new[i] >= 0:
-                    continue
-                for j in range(m_old):
-                    if used_old[j]:
+                match_new[i] = -1
+            while True:
+                bi = -1
+                bj = -1
+                bd = np.inf
+                for i in range(m_new):
+                    if match_new[i] >= 0:
                         continue
-                    d1 = 0.0
-                    d2 = 0.0
+                    for j in range(m_old):
+                        if used_old[j]:
+                            continue
+                        d1 = 0.0
+                        d2 = 0.0
+                        for q in range(3):
+                            d1 += (cpts[row, i, q] - spa[j, q]) ** 2
+                            d2 += (cpts[row, i, 3 + q] - spb[j, q]) ** 2
+                        d = math.sqrt(min(d1, d2))
+                        if d <= merge_distance and d < bd:
+                            bd = d
+                            bi = i
+                            bj = j
+                if bi < 0:
+                    break
+                match_new[bi] = bj
+                used_old[bj] = True
+            # 3. the merged set: this step's contacts, then the unmatched stored ones that did
+            #    not drift (points apart along the normal, or across it, by > drift_threshold)
+            m = 0
+            for i in range(m_new):
+                for q in range(3):
+                    pa[m, q] = cpts[row, i, q]
+                    pb[m, q] = cpts[row, i, 3 + q]
+                    nn[m, q] = cnormal[row, q]
+                j = match_new[i]
+                if j >= 0:
+                    ids[m] = sid[j]
+                    age[m] = sage[j]
+                    rank[m] = sid[j]
+                else:
+                    ids[m] = -1
+                    age[m] = 0
+                    rank[m] = _FRESH_RANK + i
+                m += 1
+            for j in range(m_old):
+                if used_old[j]:
+                    continue
+                along = 0.0
+                for q in range(3):
+                    along += (spb[j, q] - spa[j, q]) * sn[j, q]
+                side2 = 0.0
+                for q in range(3):
+                    g = spb[j, q] - spa[j, q] - along * sn[j, q]
+                    side2 += g * g
+                if along <= drift_threshold and math.sqrt(side2) <= drift_threshold:
                     for q in range(3):
-                        d1 += (cpts[row, i, q] - spa[j, q]) ** 2
-                        d2 += (cpts[row, i, 3 + q] - spb[j, q]) ** 2
-                    d = math.sqrt(min(d1, d2))
-                    if d <= merge_distance and d < bd:
-                        bd = d
-                        bi = i
-                        bj = j
-            if bi < 0:
-                break
-            match_new[bi] = bj
-            used_old[bj] = True
-        # 3. the merged set: this step's contacts, then the unmatched stored ones
-        m = 0
-        for i in range(m_new):
-            for q in range(3):
-                pa[m, q] = cpts[row, i, q]
-                pb[m, q] = cpts[row, i, 3 + q]
-                nn[m, q] = cnormal[row, q]
-            j = match_new[i]
-            if j >= 0:
-                ids[m] = sid[j]
-                age[m] = sage[j]
-                rank[m] = sid[j]
+                        pa[m, q] = spa[j, q]
+                        pb[m, q] = spb[j, q]
+                        nn[m, q] = sn[j, q]
+                    ids[m] = sid[j]
+                    age[m] = sage[j]
+                    rank[m] = sid[j]
+                    m += 1
+                else:
+                    t_id[te] = sid[j]
+                    t_kind[te] = EV_ENDED
+                    te += 1
+            for c in range(m):
+                dd = 0.0
+                for q in range(3):
+                    dd += (pb[c, q] - pa[c, q]) * nn[c, q]
+                    mid[c, q] = 0.5 * (pa[c, q] + pb[c, q])
+                depth[c] = max(0.0, -dd)
+            # 4. reduce to max_contacts
+            if m > max_contacts:
+                nrm = cnormal[row].copy() if m_new > 0 else nn[0].copy()
+                _reduce(mid, depth, rank, nrm, m, max_contacts, keep)
+                k = max_contacts
+                for c in range(m):
+                    if ids[c] < 0:
+                        continue
+                    kept = False
+                    for q in range(k):
+                        if keep[q] == c:
+                            kept = True
+                    if not kept:
+                        t_id[te] = ids[c]
+                        t_kind[te] = EV_ENDED
+                        te += 1
             else:
-                ids[m] = -1
-                age[m] = 0
-                rank[m] = _FRESH_RANK + i
-            m += 1
-        for j in range(m_old):
-            if used_old[j]:
-                continue
-            pa[m] = spa[j]
-            pb[m] = spb[j]
-            nn[m] = sn[j]
-            ids[m] = sid[j]
-            age[m] = sage[j]
-            rank[m] = sid[j]
-            m += 1
-        for c in range(m):
-            depth[c] = max(0.0, -_dot(pb[c] - pa[c], nn[c]))
-            mid[c] = 0.5 * (pa[c] + pb[c])
-        # 4. reduce to max_contacts
-        if m > max_contacts:
-            nrm = cnormal[row].copy() if m_new > 0 else nn[0].copy()
-            _reduce(mid, depth, rank, nrm, m, max_contacts, keep)
-            k = max_contacts
-            kept = np.zeros(m, np.bool_)
+                k = m
+                for c in range(m):
+                    keep[c] = c
+            # order the survivors: stored ones by id, then fresh ones in manifold order
+            for c in range(1, k):
+                v = keep[c]
+                d = c - 1
+                while d >= 0 and rank[keep[d]] > rank[v]:
+                    keep[d + 1] = keep[d]
+                    d -= 1
+                keep[d + 1] = v
             for c in range(k):
-                kept[keep[c]] = True
-            for c in range(m):
-                if not kept[c] and ids[c] >= 0:
-                    ev_tmp_id[ne] = ids[c]
-                    ev_tmp_kind[ne] = EV_ENDED
-                    ne += 1
+                src = keep[c]
+                if ids[src] < 0:
+                    ids[src] = next_id
+                    next_id += 1
+                    t_kind[te] = EV_BEGAN
+                else:
+                    t_kind[te] = EV_PERSISTED
+                t_id[te] = ids[src]
+                te += 1
+                o = nc + c
+                c_a[o] = ia
+                c_b[o] = ib
+                c_id[o] = ids[src]
+                c_age[o] = age[src]
+                c_depth[o] = depth[src]
+                for i in range(3):
+                    c_pa[o, i] = pa[src, i]
+                    c_pb[o, i] = pb[src, i]
+                    c_n[o, i] = nn[src, i]
+                for i in range(3):       # local frames: R^T (p - x)
+                    c_la[o, i] = (ra[0, i] * (pa[src, 0] - pos_w[ia, 0]) + ra[1, i] * (pa[src, 1] - pos_w[ia, 1])
+                                  + ra[2, i] * (pa[src, 2] - pos_w[ia, 2]))
+                    c_lb[o, i] = (rb[0, i] * (pb[src, 0] - pos_w[ib, 0]) + rb[1, i] * (pb[src, 1] - pos_w[ib, 1])
+                                  + rb[2, i] * (pb[src, 2] - pos_w[ib, 2]))
+                    c_na[o, i] = ra[0, i] * nn[src, 0] + ra[1, i] * nn[src, 1] + ra[2, i] * nn[src, 2]
+            # this arbiter's contact events, by id
+            for c in range(1, te):
+                vi = t_id[c]
+                vk = t_kind[c]
+                d = c - 1
+                while d >= 0 and t_id[d] > vi:
+                    t_id[d + 1] = t_id[d]
+                    t_kind[d + 1] = t_kind[d]
+                    d -= 1
+                t_id[d + 1] = vi
+                t_kind[d + 1] = vk
+            for c in range(te):
+                ev_kind[ne + c] = t_kind[c]
+                ev_id[ne + c] = t_id[c]
+            e = te
+            for c in range(nc, nc + k):
+                c_status[c] = status
+                c_method[c] = method
+            for c in range(ne, ne + e):
+                ev_a[c] = ia
+                ev_b[c] = ib
+            a_keys[na] = key
+            a_unc[na] = unc
+            a_pairs[na, 0] = ia
+            a_pairs[na, 1] = ib
+            nc += k
+            ne += e
+            na += 1
+            a_start[na] = nc
         else:
-            k = m
-            for c in range(m):
-                keep[c] = c
-        # order the survivors: stored ones by id, then fresh ones in manifold order
-        for c in range(1, k):
-            v = keep[c]
-            d = c - 1
-            while d >= 0 and rank[keep[d]] > rank[v]:
-                keep[d + 1] = keep[d]
-                d -= 1
-            keep[d + 1] = v
-        base = a * max_contacts
-        for c in range(k):
-            src = keep[c]
-            if ids[src] < 0:
-                ids[src] = next_id
-                next_id += 1
-                ev_tmp_kind[ne] = EV_BEGAN
-            else:
-                ev_tmp_kind[ne] = EV_PERSISTED
-            ev_tmp_id[ne] = ids[src]
+            ev_kind[ne] = EV_ENDED
             ne += 1
-            o = base + c
-            n_id[o] = ids[src]
-            n_age[o] = age[src]
-            n_la[o] = _mtv(ra, pa[src] - pos_w[ia])
-            n_lb[o] = _mtv(rb, pb[src] - pos_w[ib])
-            n_na[o] = _mtv(ra, nn[src])
-            n_pa[o] = pa[src]
-            n_pb[o] = pb[src]
-            n_n[o] = nn[src]
-        n_count[a] = k
-        # this arbiter's contact events, by id
-        for c in range(1, ne):
-            vi = ev_tmp_id[c]
-            vk = ev_tmp_kind[c]
-            d = c - 1
-            while d >= 0 and ev_tmp_id[d] > vi:
-                ev_tmp_id[d + 1] = ev_tmp_id[d]
-                ev_tmp_kind[d + 1] = ev_tmp_kind[d]
-                d -= 1
-            ev_tmp_id[d + 1] = vi
-            ev_tmp_kind[d + 1] = vk
-        for c in range(ne):
-            ev_arb[n_ev] = a
-            ev_kind[n_ev] = ev_tmp_kind[c]
-            ev_id[n_ev] = ev_tmp_id[c]
-            n_ev += 1
-    return next_id, n_ev
+            for s in range(s0, s1):
+                ev_kind[ne] = EV_ENDED
+                ev_a[ne] = ia
+                ev_b[ne] = ib
+                ev_id[ne] = o_id[s]
+                ne += 1
+        if has_old:
+            io += 1
+        if has_t:
+            it += 1
+    return na, nc, ne, next_id

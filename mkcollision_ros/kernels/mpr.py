@@ -46,7 +46,7 @@ from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, ST_FAILED,
                         ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
-from .geometry import centre_core, minkowski_support, shape_scale
+from .geometry import centre_core, minkowski_support_xyz, shape_scale
 from .jit import njit_kernel
 
 
@@ -72,14 +72,11 @@ def _norm(a):
 @njit_kernel
 def _support(sa, sb, verts, r_ab, t_ab, d, w, wa, wb, k):
     """Support of D along ``d`` into row ``k`` of w, wa, wb (each (5, 3))."""
-    ta = np.empty(3)
-    tb = np.empty(3)
-    tw = np.empty(3)
-    minkowski_support(sa, sb, verts, r_ab, t_ab, d, False, ta, tb, tw)
-    for i in range(3):
-        w[k, i] = tw[i]
-        wa[k, i] = ta[i]
-        wb[k, i] = tb[i]
+    ax, ay, az, bx, by, bz = minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, d[0], d[1],
+                                                   d[2], False)
+    wa[k, 0], wa[k, 1], wa[k, 2] = ax, ay, az
+    wb[k, 0], wb[k, 1], wb[k, 2] = bx, by, bz
+    w[k, 0], w[k, 1], w[k, 2] = ax - bx, ay - by, az - bz
 
 
 @njit_kernel

@@ -3,8 +3,12 @@
 ``collide_pair`` puts a pair in the canonical order (code_a <= code_b, so a plane is
 always B), calls the method's kernel in A's frame, and maps the answer back when it had
 to swap: the normal flips, the witness points exchange and return to A's frame.
-``collide_batch`` runs ``collide_pair`` over pairs with ``prange``; each pair writes only
-its own row of ``out`` / ``status``, so the result does not depend on the thread count.
+``collide_batch`` splits the pairs into fixed contiguous chunks of NP_CHUNK pairs and runs
+the chunks with ``prange``; each chunk allocates one set of scratch buffers
+(``make_workspace``: poses, a result row, the GJK/EPA buffers) and reuses it pair after
+pair, so the per-pair path allocates nothing.  Each pair writes only its own row of
+``out`` / ``status`` and no state survives between pairs, so the result does not depend
+on the thread count.
 
 Method codes (constants.M_*):
   M_AUTO               the closed form when one exists (kernels/analytic.py), else GJK/EPA
@@ -17,20 +21,47 @@ Method codes (constants.M_*):
 Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
 the requested method code.
 """
+from collections import namedtuple
+
 import numpy as np
 
-from .analytic import collide_analytic
-from .constants import (M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
-                        M_GJK_EPA, M_MPR, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL,
-                        OUT_PA, OUT_PB, OUT_SIZE, PLANE, ST_NOT_RUN)
+from .analytic import box_box_sat, classify, closed_form_ordered, collide_analytic
+from .constants import (BOX, CAPSULE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
+                        M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS, OUT_METHOD,
+                        OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
+                        ST_NOT_RUN)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
-from .geometry import quat_to_matrix
-from .gjk_epa import gjk_epa
+from .geometry import quat_to_matrix_into, shape_scale
+from .gjk_epa import gjk_epa_ws, make_gjk_workspace
 from .jit import njit_kernel, njit_parallel, prange
 from .mpr import mpr
 
 # subdivision level passed to ellipsoid_sampled by the dispatcher
 ELLIPSOID_SAMPLED_SUBDIV = 3
+
+# Scratch buffers of one chunk of pairs, few arrays (numba reference-counts each array
+# passed to a function): m float64 (14, 3) = world rotations ra (rows 0-2), rb (3-5),
+# the relative pose r_ab (6-8) / t_ab (9), the swapped pose r_ba (10-12) / t_ba (13);
+# rows float64 (2, OUT_SIZE) = result rows row and tmp; gjk = gjk_epa.GjkWorkspace.
+Workspace = namedtuple("Workspace", ("m", "rows", "gjk"))
+
+
+@njit_kernel
+def make_workspace():
+    """Fresh scratch buffers for ``collide_pair_ws`` / ``collide_world_ws``."""
+    return Workspace(np.empty((14, 3)), np.empty((2, OUT_SIZE)), make_gjk_workspace())
+
+
+@njit_kernel
+def _has_closed_form(code_a, code_b):
+    """True when analytic.closed_form_ordered handles the ordered pair (code_a <=
+    code_b): a half-space B with any other shape, sphere with sphere, box, capsule or
+    cylinder, capsule with capsule."""
+    if code_b == PLANE:
+        return code_a != PLANE
+    if code_a == SPHERE:
+        return code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
+    return code_a == CAPSULE and code_b == CAPSULE
 
 
 @njit_kernel
@@ -42,18 +73,24 @@ def _blank(out, method):
 
 
 @njit_kernel
-def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out):
+def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
     """Run ``method`` on a pair already in canonical order; result in A's frame."""
     has_plane = sa[0] == PLANE or sb[0] == PLANE
+    if method == M_AUTO and sa[0] == BOX and sb[0] == BOX:
+        # overlapping box cores: SAT gives the exact depth; apart: GJK's exact distance
+        st = box_box_sat(sa, sb, r_ab, t_ab, out)
+        if st != ST_NOT_RUN:
+            return st
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
     if method == M_AUTO or method == M_ANALYTIC:
         st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
         if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
             if st == ST_NOT_RUN:
                 _blank(out, method)
             return st
-        return gjk_epa(sa, sb, verts, r_ab, t_ab, out)
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
     if method == M_GJK_EPA:
-        return gjk_epa(sa, sb, verts, r_ab, t_ab, out)
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
@@ -75,25 +112,33 @@ def collide_pair(sa, sb, verts, r_ab, t_ab, method, out):
     method  int64 method code (constants.M_*)
     out     float64 (OUT_SIZE,): signed distance (m, < 0 penetrating), unit normal A -> B,
             witness points pa on A and pb on B (A's frame), iterations, method code
-    Returns the status code (constants.ST_*).
+    Returns the status code (constants.ST_*).  Allocates its scratch buffers; loops over
+    many pairs use ``collide_pair_ws`` with one ``make_workspace()``.
     """
+    return collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, make_workspace())
+
+
+@njit_kernel
+def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws):
+    """``collide_pair`` with caller-provided scratch buffers ``ws`` (make_workspace());
+    ``r_ab``/``t_ab`` may be ws.m[6:9]/ws.m[9] (only r_ba, t_ba, tmp, gjk are written)."""
     _blank(out, method)
     if sa[0] <= sb[0]:
-        st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out)
+        st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws)
         if st == ST_NOT_RUN:
             _blank(out, method)
         return st
     # swap to canonical order: solve (B, A) in B's frame, then map back
-    r_ba = np.empty((3, 3))
-    t_ba = np.empty(3)
+    r_ba = ws.m[10:13]
+    t_ba = ws.m[13]
     for i in range(3):
         for j in range(3):
             r_ba[i, j] = r_ab[j, i]
     for i in range(3):
         t_ba[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
-    tmp = np.empty(OUT_SIZE)
+    tmp = ws.rows[1]
     _blank(tmp, method)
-    st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp)
+    st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp, ws)
     if st == ST_NOT_RUN:
         _blank(out, method)
         return st
@@ -120,11 +165,22 @@ def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a
     """One pair from world poses; ``out`` (OUT_SIZE,) in the WORLD frame.
 
     prm_* float64 (8,), vr_* int64 (2,) (first vertex, count), pos_* float64 (3,) m,
-    quat_* float64 (4,) xyzw unit.  Returns the status code."""
-    ra = quat_to_matrix(quat_a)
-    rb = quat_to_matrix(quat_b)
-    r_ab = np.empty((3, 3))
-    t_ab = np.empty(3)
+    quat_* float64 (4,) xyzw unit.  Returns the status code.  Allocates its scratch
+    buffers; loops use ``collide_world_ws``."""
+    return collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a,
+                            quat_a, pos_b, quat_b, method, out, make_workspace())
+
+
+@njit_kernel
+def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
+                     pos_b, quat_b, method, out, ws):
+    """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())."""
+    ra = ws.m[0:3]
+    rb = ws.m[3:6]
+    quat_to_matrix_into(quat_a, ra)
+    quat_to_matrix_into(quat_b, rb)
+    r_ab = ws.m[6:9]
+    t_ab = ws.m[9]
     for i in range(3):
         t_ab[i] = (ra[0, i] * (pos_b[0] - pos_a[0]) + ra[1, i] * (pos_b[1] - pos_a[1])
                    + ra[2, i] * (pos_b[2] - pos_a[2]))
@@ -132,8 +188,15 @@ def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a
             r_ab[i, j] = ra[0, i] * rb[0, j] + ra[1, i] * rb[1, j] + ra[2, i] * rb[2, j]
     sa = (code_a, prm_a, vr_a[0], vr_a[1])
     sb = (code_b, prm_b, vr_b[0], vr_b[1])
-    row = np.empty(OUT_SIZE)
-    st = collide_pair(sa, sb, verts, r_ab, t_ab, method, row)
+    row = ws.rows[0]
+    if ((method == M_AUTO or method == M_ANALYTIC) and code_a <= code_b
+            and _has_closed_form(code_a, code_b)):
+        # fast path, same result as collide_pair_ws: fewer call levels (each passes
+        # arrays, whose reference counts numba updates on every call)
+        st = classify(closed_form_ordered(sa, sb, verts, r_ab, t_ab, row),
+                      shape_scale(sa, sb))
+    else:
+        st = collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, row, ws)
     out[OUT_DIST] = row[OUT_DIST]
     for i in range(3):
         n = 0.0
@@ -163,11 +226,16 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, ou
     method int64             method code (constants.M_*)
     out    float64 (P, OUT_SIZE)  written: signed distance, normal A -> B, pa, pb (world)
     status int64 (P,)        written: status codes (constants.ST_*)
-    Each pair writes only its own slot: deterministic for any number of threads.
+    Pairs run in fixed chunks of NP_CHUNK, one scratch workspace per chunk; each pair
+    writes only its own slot: deterministic for any number of threads.
     """
-    for k in prange(pairs.shape[0]):
-        i = pairs[k, 0]
-        j = pairs[k, 1]
-        status[k] = collide_world(codes[i], params[i], vrange[i], codes[j], params[j],
-                                  vrange[j], verts, pos_w[i], quat_w[i], pos_w[j],
-                                  quat_w[j], method, out[k])
+    n_pairs = pairs.shape[0]
+    n_chunks = (n_pairs + NP_CHUNK - 1) // NP_CHUNK
+    for ch in prange(n_chunks):
+        ws = make_workspace()
+        for k in range(ch * NP_CHUNK, min(n_pairs, (ch + 1) * NP_CHUNK)):
+            i = pairs[k, 0]
+            j = pairs[k, 1]
+            status[k] = collide_world_ws(codes[i], params[i], vrange[i], codes[j],
+                                         params[j], vrange[j], verts, pos_w[i], quat_w[i],
+                                         pos_w[j], quat_w[j], method, out[k], ws)

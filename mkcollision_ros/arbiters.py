@@ -6,15 +6,19 @@ step it receives the pair's new contacts (world frame, from the manifold) and:
 
   1. refreshes its stored contacts: each is kept in the two bodies' local frames
      (``local_a`` in A's frame, ``local_b`` in B's frame, ``normal_a`` in A's frame), so
-     it follows the bodies; re-expressed in the world, a contact whose points drifted
-     apart along the normal by more than ``drift_threshold`` (m, separating) or across
-     it by more than ``drift_threshold`` is dropped (``ended``);
+     it follows the bodies;
   2. matches every new contact to the closest stored one (greedy by distance, closest
      first, deterministic ties): within ``merge_distance`` (m, distance between the new
      and stored points on either body) it updates it and keeps its ``contact_id``;
      otherwise it is added (``began``) and, if it survives step 4, gets a new id from a
-     monotonic counter (ids are never reused);
-  3. stored contacts not matched survive (``persisted``) while within the drift rule;
+     monotonic counter (ids are never reused).  Matching comes before the drift rule
+     (as Bullet's getCacheEntry comes before refreshContactPoints): a body sliding or
+     spinning faster than ``drift_threshold`` per step moves the stored point on the
+     other body away, but the new point is still where the stored one is on its own
+     body, so the id survives (the demo's id churn; tests/test_pipeline.py);
+  3. stored contacts not matched survive (``persisted``) while their points, re-expressed
+     in the world, are within ``drift_threshold`` (m) of each other along the normal
+     (separating) and across it; otherwise they end (``ended``);
   4. reduces to ``max_contacts``: the deepest, then the farthest from it, then the
      point spanning the largest triangle, then the largest quadrilateral, and so on by
      greedy area (Bullet's ``sortCachedPoints``, Jolt's ``PruneContactPoints``);

@@ -371,3 +371,65 @@ def test_sphere_inside_cylinder_nearest_face():
     st, out = run(s, cyl, np.eye(3), -np.array([0.8, 0.0, 0.1]))
     assert out[C.OUT_DIST] == pytest.approx(-0.5, abs=1e-14)
     assert out[C.OUT_NORMAL:C.OUT_NORMAL + 3] == pytest.approx([-1, 0, 0], abs=1e-14)
+
+
+def test_sphere_cone_closed_form_against_gjk_epa():
+    """sphere-cone closed form (meridian-plane triangle) against GJK/EPA and the
+    invariants: witness points on the surfaces, pb - pa = distance * normal, the depth
+    certified by the support function along the normal."""
+    from mkcollision_ros import collide
+    import oracles as O
+    rng = np.random.default_rng(78)
+    n, hits = 300, 0
+    for k in range(n):
+        sa_d = rand_shape(rng, "sphere")
+        sb_d = rand_shape(rng, "cone")
+        sa, _ = tup(sa_d)
+        sb, _ = tup(sb_d)
+        scale = sa[1][7] + sb[1][7]
+        qb = O.random_quats(rng, 1)[0]
+        r = O.quat_matrix(qb).T          # B's frame is A's, A is rotated: pose of B in A
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        t = u * rng.uniform(0.0, 1.5) * contact_offset(sa, sb, r, u)
+        if k % 10 == 0:
+            t = u * 1e-3 * scale
+        st, out = run(sa_d, sb_d, r, t)
+        assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
+        d = out[C.OUT_DIST]
+        nrm = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
+        pa = out[C.OUT_PA:C.OUT_PA + 3]
+        pb = out[C.OUT_PB:C.OUT_PB + 3]
+        hits += st != C.ST_SEPARATED
+        assert abs(np.linalg.norm(nrm) - 1.0) < 1e-12
+        np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
+        # the same pair in world poses: A at the origin (identity), B at (t, r)
+        pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+        pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
+        assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
+        assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
+        h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
+        assert d == pytest.approx(-h, abs=1e-9 * scale)
+        g = collide(sa_d, pose_a, sb_d, pose_b, method="gjk_epa")
+        assert g.distance == pytest.approx(d, abs=1e-6 * scale)
+        st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
+        assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+    assert 0.3 * n <= hits <= 0.8 * n
+
+
+def _quat_wxyz(r):
+    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
+    tr = np.trace(r)
+    if tr > 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        return np.array([0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s,
+                         (r[1, 0] - r[0, 1]) / s])
+    i = int(np.argmax(np.diag(r)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2.0 * math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
+    q = np.empty(4)
+    q[0] = (r[k, j] - r[j, k]) / s
+    q[1 + i] = 0.25 * s
+    q[1 + j] = (r[j, i] + r[i, j]) / s
+    q[1 + k] = (r[k, i] + r[i, k]) / s
+    return q

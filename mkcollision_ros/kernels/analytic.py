@@ -1,5 +1,5 @@
 """Exact closed-form pair tests: sphere-sphere, sphere-box, sphere-capsule,
-sphere-cylinder, capsule-capsule, and a half-space (plane) against any shape; plus
+sphere-cylinder, sphere-cone, capsule-capsule, and a half-space (plane) against any shape; plus
 ``box_box_sat``, the separating-axis depth of two boxes whose cores overlap (used by the
 dispatcher's auto method before GJK; not part of ``collide_analytic``, since separated
 boxes need GJK for their exact distance).
@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CYLINDER, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD,
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import inflation, shape_scale, support_full_xyz
@@ -220,6 +220,62 @@ def _sphere_cylinder(sa, sb, r_ab, t_ab, out):
 
 
 @njit_kernel
+def _seg2_closest(px, pz, ax, az, bx, bz):
+    """Closest point (x, z) to (px, pz) on the 2-D segment [(ax, az), (bx, bz)]."""
+    ex, ez = bx - ax, bz - az
+    ee = ex * ex + ez * ez
+    t = 0.0
+    if ee > 0.0:
+        t = min(1.0, max(0.0, ((px - ax) * ex + (pz - az) * ez) / ee))
+    return ax + t * ex, az + t * ez
+
+
+@njit_kernel
+def _sphere_cone(sa, sb, r_ab, t_ab, out):
+    """A = sphere (centre at A's origin), B = cone (base radius R at z = -h, tip at
+    z = +h, rounded by its margin).  In the centre's meridian plane (rho, z) the cone is
+    the triangle tip (0, h), rim (R, -h), base centre (0, -h), whose surface edges are
+    the slant tip-rim and the base rim-centre (its right angle is at the base centre, so
+    an inside point's feet on both edge lines fall within the edges)."""
+    ra = inflation(sa[0], sa[1])
+    rb = inflation(sb[0], sb[1])
+    rr, h = sb[1][0], sb[1][1]
+    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
+    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
+    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    rho = math.sqrt(c0 * c0 + c1 * c1)
+    if rho > 0.0:
+        ux, uy = c0 / rho, c1 / rho
+    else:
+        ux, uy = 1.0, 0.0
+    # outward unit normal of the slant in (rho, z): (2h, R) / L
+    ln = math.sqrt(4.0 * h * h + rr * rr)
+    sr, sz = 2.0 * h / ln, rr / ln
+    g_slant = rho * sr + (c2 - h) * sz      # signed distance to the slant line
+    g_base = -(c2 + h)                     # signed distance to the base plane
+    if g_slant <= 0.0 and g_base <= 0.0:
+        # centre inside the core: B moves against the outward normal of the nearer face
+        if g_slant >= g_base:
+            core = g_slant
+            n0, n1, n2 = -sr * ux, -sr * uy, -sz
+        else:
+            core = g_base
+            n0, n1, n2 = 0.0, 0.0, 1.0
+    else:
+        qr, qz = _seg2_closest(rho, c2, 0.0, h, rr, -h)
+        br, bz = _seg2_closest(rho, c2, rr, -h, 0.0, -h)
+        if (br - rho) ** 2 + (bz - c2) ** 2 < (qr - rho) ** 2 + (qz - c2) ** 2:
+            qr, qz = br, bz
+        d0, d1, d2 = qr * ux - c0, qr * uy - c1, qz - c2
+        core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        n0, n1, n2 = d0 / core, d1 / core, d2 / core
+    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
+    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
+    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
+
+
+@njit_kernel
 def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     """A = any non-plane shape, B = half-space n.x <= d (B's frame)."""
     nb = sb[1]
@@ -265,6 +321,8 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
         return True, _sphere_box(sa, sb, r_ab, t_ab, out)
     if ca == SPHERE and cb == CYLINDER:
         return True, _sphere_cylinder(sa, sb, r_ab, t_ab, out)
+    if ca == SPHERE and cb == CONE:
+        return True, _sphere_cone(sa, sb, r_ab, t_ab, out)
     if ca == SPHERE and cb == CAPSULE:
         hb = sb[1][1]
         px, py, pz = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]

@@ -1,46 +1,53 @@
-"""Broad phase: world AABBs from support functions, then sweep-and-prune.
+"""Broad phase: exact world AABBs, then a hashed uniform grid; pose and pair filters.
 
 Phases
-  1. ``world_aabbs``  - exact world AABB of every body: the support point along each of
-     the six world half-axes (the axis turned into the body frame, ``support_full``, so
-     margins are included), grown by ``grow`` (m) on every side.  A plane has no bounded
-     support: its AABB is +-inf on every axis except the one its normal is aligned with
-     (if any), and its world half-space ``n_w . x <= d_w`` (grown by margin and ``grow``)
-     is written to ``plane_w`` for the pair test.
-  2. ``find_pairs``   - sweep-and-prune along the axis of greatest spread of the AABB
-     centres.  The sort is warm-started from the previous step's order (an insertion sort
-     on an almost-sorted array, O(N + swaps), with a cap on the number of swaps after
-     which it falls back to a merge-sort ``argsort``).  Each plane is paired with every
-     non-plane body whose AABB reaches its grown half-space (the AABB corner farthest
-     along -n_w satisfies n_w . x <= d_w).  Plane-plane pairs are never reported
-     (the narrow phase does not run them).
+  1. ``world_aabbs``  - exact world AABB of every body from closed forms of each shape's
+     extent along the world axes (box |R| h, ellipsoid sqrt(sum (r_kj a_j)^2), capsule,
+     cylinder and cone from their axis and rim; a hull's rotated vertices), grown by the
+     margin and ``grow`` (m) on every side.  A plane has no bounded extent: its AABB is
+     +-inf on every axis except the one its normal is aligned with (if any), and its
+     world half-space ``n_w . x <= d_w`` (grown by margin and ``grow``) is written to
+     ``plane_w`` for the pair test.
+  2. ``find_pairs``   - a uniform grid, cell edge GRID_CELL_SCALE x the mean largest
+     AABB extent, hashed (Morton code folded onto the table size) into a table of
+     counting-sorted entries; every body is entered in each cell its AABB touches, and
+     a pair is reported only from the lower body's row and only in the cell holding the
+     corner max(lo_i, lo_j), so exactly once.  Bodies spanning more than GRID_BIG_CELLS
+     cells are tested against every body instead.  Rows are visited in the previous
+     call's space-filling order (passed in and handed back, the broad phase keeps no
+     state).  Each plane is paired with every non-plane body whose AABB reaches its
+     grown half-space (the AABB corner farthest along -n_w satisfies n_w . x <= d_w).
+     Plane-plane pairs are never reported (the narrow phase does not run them).
+  3. ``filter_pairs`` (static / group-mask / allowed pairs) and ``normalise_poses``:
+     the pipeline's per-pair and per-body checks as one pass each.
 
 The reported set is EXACTLY the pairs whose closed AABB intervals overlap on all three
 axes (plus the plane rule above), as int64 (P, 2) rows (i, j), i < j, sorted
-lexicographically; every loop writes into fixed slots, so the output does not depend
-on the thread count.  The broad phase keeps no state: the warm-start order is passed in
-and handed back to the caller.
+lexicographically; every loop writes into fixed slots (two passes: count, then write
+each row's sorted keys at its offset), so the output does not depend on the thread
+count or on the visiting order.
 
-Why sweep-and-prune and not a hashed uniform grid - measured (one thread, best of 20,
-on a shared 2-core machine, 10,000 bodies unless noted; the grid was a throw-away numba
-prototype with cell = 2 x median AABB size, bodies over 64 cells tested against all,
-each pair reported only in the cell of its max-lo corner; both gave identical pairs):
+Why a grid (it replaced sweep-and-prune, which was kept until the 10,000-body pipeline
+benchmark).  Measured, one thread, median of 9, on the shared 2-core machine while
+another engineer's jobs ran (so read ratios, not absolutes), identical pairs:
 
     scene                                     pairs    SAP (warm)   grid
-    uniform random, ~0.2 pairs per body        2,302     12 ms       9 ms
-    same plus 1 % large 8 m slabs             14,466     21 ms      41 ms
-    bodies on a line                          11,046    1.7 ms     5.6 ms
-    500 bodies stacked at one point          124,750     20 ms      34 ms
+    bench scene, 10,000 bodies, 0.2 per body   4,412   12-18 ms     8-13 ms
+    bench scene, 10,000 bodies, 2 per body    42,978   54-58 ms    27-32 ms
+    same as the first plus 1 % 8 m slabs      24,755   19-21 ms    36-39 ms
+    10,000 bodies on a line                   12,342  1.5-1.9 ms  2.6-3.8 ms
+    500 bodies stacked at one point          124,750   13-18 ms    3.2-5 ms
+    bench scene, 1,000 bodies, 0.2 per body      432  0.45-0.6 ms 0.5-0.75 ms
 
-The grid wins only slightly on its best case (uniform sizes) and loses 2-3x as soon as
-sizes mix (a ground slab next to small parts), on lines and on piles; it also needs a
-cell size.  SAP has no tuning parameter and its cost is output-sensitive.  The warm
-start removes the sort cost (10,000 keys: cold merge-sort ~1 ms, warm insertion ~0.02
-ms when bodies barely move).  Two passes (count, then write only the rows that have
-pairs) keep the threaded sweep deterministic.  Threads pay off only above a few
-thousand bodies: waking the second thread costs up to milliseconds on a loaded
-machine, so the pipeline runs smaller batches with ``numba.set_num_threads(1)`` (the
-same compiled code, hence the same numbers).
+SAP tests every body against all the bodies whose x-interval it overlaps, which in a
+uniform 3-D scene is ~N^(1/3) times the true neighbours; the grid only sees the cells
+around each body, so it grows linearly at fixed density.  It loses on one-dimensional
+layouts (where SAP is ideal) and on large slabs among small parts (randomly turned
+8 m slabs span ~1,000 cells each, so they are "big" and tested against every body).  The cost is
+dominated by memory latency (random bucket reads), hence the Morton hash and the
+space-filling visiting order.  Threads: on this machine a second thread made these
+kernels slower whenever the other core was busy, so the pipeline runs them on one
+thread below ``PARALLEL_MIN_CHEAP_ITEMS`` (the same compiled code, the same numbers).
 """
 import math
 
@@ -54,8 +61,9 @@ from .jit import njit_kernel, njit_parallel, prange
 PLANE_AXIS_TOL = 1e-12
 # grid cell edge = this x the mean largest AABB extent of the bodies (dimensionless)
 GRID_CELL_SCALE = 1.5
-# a body spanning more than this many cells along an axis is tested against every body
-GRID_BIG_CELLS = 4
+# a body spanning more than this many cells is not put in the grid but tested against
+# every body (a ground slab of 8 x 8 m among 1 m parts spans ~60 cells: still gridded)
+GRID_BIG_CELLS = 256
 # at most this many cells along an axis (the cell grows for very spread scenes; keys
 # pack each cell coordinate in 21 bits)
 GRID_MAX_CELLS = 1 << 20
@@ -174,7 +182,13 @@ def _cell_hash(ix, iy, iz, mask, shift):
     buckets: its Morton code folded onto ``shift`` bits, so that nearby cells get nearby
     buckets (the scans stay in cache) while far-spread scenes still use every bucket;
     distinct cells may share a bucket, entries carry their cell."""
-    code = _spread3(ix) | (_spread3(iy) << 1) | (_spread3(iz) << 2)
+    return _fold(_spread3(ix) | (_spread3(iy) << 1) | (_spread3(iz) << 2), mask, shift)
+
+
+@njit_kernel
+def _fold(code, mask, shift):
+    """A Morton code folded onto ``shift`` bits (see ``_cell_hash``); the loops over a
+    body's cells spread each coordinate once and call this per cell."""
     return (code ^ (code >> shift) ^ (code >> (2 * shift)) ^ (code >> (3 * shift))) & mask
 
 
@@ -229,10 +243,12 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
             lo0, lo1, lo2 = lo[i, 0], lo[i, 1], lo[i, 2]
             hi0, hi1, hi2 = hi[i, 0], hi[i, 1], hi[i, 2]
             for ix in range(x0, cmax[r, 0] + 1):
+                sx = _spread3(ix)
                 for iy in range(y0, cmax[r, 1] + 1):
+                    sxy = sx | (_spread3(iy) << 1)
                     for iz in range(z0, cmax[r, 2] + 1):
                         key = (ix << 42) | (iy << 21) | iz
-                        hb = _cell_hash(ix, iy, iz, mask, shift)
+                        hb = _fold(sxy | (_spread3(iz) << 2), mask, shift)
                         for e in range(bucket_start[hb], bucket_start[hb + 1]):
                             t = e_body[e]
                             if t <= r or e_key[e] != key:
@@ -334,18 +350,17 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     n_entries = 0
     for r in range(m):
         i = bodies[r]
-        cells = 1
+        cells = 1.0
         for k in range(3):
             cmin[r, k] = np.int64(math.floor((lo[i, k] - origin[k]) / h))
             cmax[r, k] = np.int64(math.floor((hi[i, k] - origin[k]) / h))
-            w = cmax[r, k] - cmin[r, k] + 1
-            if w > GRID_BIG_CELLS:
-                is_big[r] = True
-            cells *= w
+            cells *= float(cmax[r, k] - cmin[r, k] + 1)
+        if cells > GRID_BIG_CELLS:
+            is_big[r] = True
         if is_big[r]:
             n_big += 1
         else:
-            n_entries += cells
+            n_entries += np.int64(cells)
     big = np.empty(n_big, np.int64)
     n_big = 0
     for r in range(m):
@@ -381,9 +396,11 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
         if is_big[r]:
             continue
         for ix in range(cmin[r, 0], cmax[r, 0] + 1):
+            sx = _spread3(ix)
             for iy in range(cmin[r, 1], cmax[r, 1] + 1):
+                sxy = sx | (_spread3(iy) << 1)
                 for iz in range(cmin[r, 2], cmax[r, 2] + 1):
-                    bucket_start[_cell_hash(ix, iy, iz, mask, shift) + 1] += 1
+                    bucket_start[_fold(sxy | (_spread3(iz) << 2), mask, shift) + 1] += 1
     for c in range(size):
         bucket_start[c + 1] += bucket_start[c]
     fill = bucket_start[:size].copy()
@@ -397,9 +414,11 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
             continue
         i = bodies[r]
         for ix in range(cmin[r, 0], cmax[r, 0] + 1):
+            sx = _spread3(ix)
             for iy in range(cmin[r, 1], cmax[r, 1] + 1):
+                sxy = sx | (_spread3(iy) << 1)
                 for iz in range(cmin[r, 2], cmax[r, 2] + 1):
-                    hb = _cell_hash(ix, iy, iz, mask, shift)
+                    hb = _fold(sxy | (_spread3(iz) << 2), mask, shift)
                     e = fill[hb]
                     e_body[e] = r
                     e_key[e] = _cell_key(ix, iy, iz)

@@ -39,7 +39,10 @@ Phases of ``gjk_epa``
      is ST_FAILED only if the gap to the EPA lower bound exceeds EPA_FAIL_GAP * scale.
   Witness points: barycentric coordinates of the closest point on the final simplex /
   EPA face, applied to the support points of A and B, then moved out by the radii.
-  Scratch memory: ``gjk_epa`` allocates one GjkWorkspace per call; the batch kernel
+  When the origin's projection falls outside the final EPA face (sliver faces of flat
+  or face-to-face contacts), GJK on the pair just pulled apart along the normal gives
+  them instead (_witness_by_gjk; regression scenes drake21673_box_box, _convex5).
+  Scratch memory: ``gjk_epa`` allocates one workspace per call; the batch kernel
   calls ``gjk_epa_ws`` with one workspace per chunk of pairs (no allocation per pair).
 
 Measured accuracy against coal 3.0.3 (gjk_tolerance 1e-12, epa_tolerance 1e-10, see
@@ -61,11 +64,11 @@ trustworthy; scale = sum of bounding radii):
     ellipsoids and cones).
 """
 import math
-from collections import namedtuple
 
 import numpy as np
 
 from .constants import (EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES, EPA_MAX_ITERS, EPA_REL_TOL,
+                        EPA_WITNESS_SHIFT,
                         GJK_ABS_TOL, GJK_MAX_ITERS, GJK_REL_TOL, M_GJK_EPA,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
                         OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
@@ -73,7 +76,7 @@ from .constants import (EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES, EPA_MAX_ITER
 from .geometry import inflation, minkowski_support_xyz, shape_scale
 from .jit import njit_kernel
 
-# Scratch buffers of one GJK/EPA call, allocated once per chunk of pairs by the batch
+# Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of pairs by the batch
 # kernel and reused pair after pair; no state survives from one pair to the next.  Three
 # backing arrays only (numba reference-counts every array passed to a function, so a
 # tuple of many small arrays costs more per call than the work of an analytic pair):
@@ -86,7 +89,7 @@ from .jit import njit_kernel
 #      (col 0) and the seen faces (col 1) as lists
 # t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 4-7 d, wa, wb, w of gjk_epa; 8-11
 # d, wa, wb, w of _gjk / _grow_to_tetra / _epa; 12 v_prev (_gjk) or cin (_epa); 13-14
-# ud, uwa (_epa); 15-18 bw, bwa, bwb, bdir (_grow_to_tetra); 19-24 d, wa, wb, w, e1, e2
+# ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir (_grow_to_tetra); 19-24 d, wa, wb, w, e1, e2
 # (_polish_min_support).
 _NVMAX = EPA_MAX_ITERS + 4
 _W, _WA, _WB, _WP, _WAP, _WBP = 0, 4, 8, 12, 16, 20
@@ -105,14 +108,14 @@ _IE = EPA_MAX_FACES
 _IS = _IE + 3 * EPA_MAX_FACES
 _IC = _IS + EPA_MAX_FACES
 _IV_ROWS = _IC + EPA_MAX_FACES
-GjkWorkspace = namedtuple("GjkWorkspace", ("fs", "fv", "iv"))
 
 
 @njit_kernel
 def make_gjk_workspace():
-    """Fresh scratch buffers for ``gjk_epa_ws`` (see GjkWorkspace)."""
-    return GjkWorkspace(np.empty((_FS_ROWS, 3)), np.zeros(_FV_SIZE),
-                        np.zeros((_IV_ROWS, 3), dtype=np.int64))
+    """Fresh scratch buffers for ``gjk_epa_ws``: the tuple ``ws`` = (fs, fv, iv) above
+    (a plain tuple: kernels import only numpy, numba and math)."""
+    return (np.empty((_FS_ROWS, 3)), np.zeros(_FV_SIZE),
+            np.zeros((_IV_ROWS, 3), dtype=np.int64))
 
 
 # outcome flags of the GJK loop
@@ -350,10 +353,10 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
     the support points of A and B (A's frame), lam (4,) barycentric weights, v (3,) the
     closest point of the simplex.
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP)."""
-    fs, fv = ws.fs, ws.fv
+    fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
-    d, wa, wb, w = ws.fs[_T3 + 8], ws.fs[_T3 + 9], ws.fs[_T3 + 10], ws.fs[_T3 + 11]
+    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     for q in range(4):
         lam[q] = 0.0
     tn = math.sqrt(_dot(t_ab, t_ab))
@@ -378,7 +381,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
     vv = _dot(v, v)
     W_prev, WA_prev, WB_prev = fs[_WP:_WP + 4], fs[_WAP:_WAP + 4], fs[_WBP:_WBP + 4]
     lam_prev = fv[_LAMP:_LAMP + 4]
-    v_prev = ws.fs[_T3 + 12]
+    v_prev = ws[0][_T3 + 12]
     it = 0
     flag = _GJK_CAP
     while it < GJK_MAX_ITERS:
@@ -418,7 +421,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
             WA[n, c] = wa[c]
             WB[n, c] = wb[c]
         n += 1
-        n = _closest_simplex(W, WA, WB, n, lam, v, ws.fv[_L3:_L3 + 3], ws.fv[_VOL:_VOL + 4])
+        n = _closest_simplex(W, WA, WB, n, lam, v, ws[1][_L3:_L3 + 3], ws[1][_VOL:_VOL + 4])
         if n == 4:
             flag = _GJK_OVERLAP
             break
@@ -488,9 +491,9 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
     shapes along directions normal to its affine hull.  Returns the new count (4), or
     -1 when the Minkowski difference is flat there (touching, depth 0); on -1 the unit
     normal of the flat direction is in W[3].  W, WA, WB: the workspace's simplex."""
-    W, WA, WB = ws.fs[_W:_W + 4], ws.fs[_WA:_WA + 4], ws.fs[_WB:_WB + 4]
-    d, wa, wb, w = ws.fs[_T3 + 8], ws.fs[_T3 + 9], ws.fs[_T3 + 10], ws.fs[_T3 + 11]
-    cand = ws.fs[_CAND:_CAND + 6]
+    W, WA, WB = ws[0][_W:_W + 4], ws[0][_WA:_WA + 4], ws[0][_WB:_WB + 4]
+    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
+    cand = ws[0][_CAND:_CAND + 6]
     tol = EPA_DEGEN_TOL * scale
     while n < 4:
         # candidate directions orthogonal to the hull of W[:n]
@@ -530,7 +533,7 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
             cand[1, 0], cand[1, 1], cand[1, 2] = -nx, -ny, -nz
             ndir = 2
         best = -1.0
-        bw, bwa, bwb, bdir = ws.fs[_T3 + 15], ws.fs[_T3 + 16], ws.fs[_T3 + 17], ws.fs[_T3 + 18]
+        bw, bwa, bwb, bdir = ws[0][_T3 + 15], ws[0][_T3 + 16], ws[0][_T3 + 17], ws[0][_T3 + 18]
         for c in range(3):
             bdir[c] = 0.0
         for k in range(ndir):
@@ -602,8 +605,8 @@ def _face_setup(V, F, FN, FD, f, cin):
 def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws):
     """Pattern search for min over unit u of h_{A-B}(u) starting at ``ud`` (3,) with
     value ``ub``; updates ud and uwa (A's support point) in place, returns the value."""
-    d, wa, wb, w = ws.fs[_T3 + 19], ws.fs[_T3 + 20], ws.fs[_T3 + 21], ws.fs[_T3 + 22]
-    e1, e2 = ws.fs[_T3 + 23], ws.fs[_T3 + 24]
+    d, wa, wb, w = ws[0][_T3 + 19], ws[0][_T3 + 20], ws[0][_T3 + 21], ws[0][_T3 + 22]
+    e1, e2 = ws[0][_T3 + 23], ws[0][_T3 + 24]
     step = 1e-2
     it = 0
     while step > 1e-10 and it < 4 * EPA_MAX_ITERS:
@@ -649,12 +652,12 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
 @njit_kernel
 def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
-    holds the origin; W, WA, WB of the workspace ``ws``).  Writes ws.fv[_RES:_RES + 10] (10,) =
+    holds the origin; W, WA, WB of the workspace ``ws``).  Writes ws[1][_RES:_RES + 10] (10,) =
     [depth, nx, ny, nz, pa(3), pb(3)] (normal =
     outward normal of A - B at its boundary point closest to the origin = A to B) and
     returns (iterations, converged)."""
     nvmax = EPA_MAX_ITERS + 4
-    fs, fv, iv = ws.fs, ws.fv, ws.iv
+    fs, fv, iv = ws[0], ws[1], ws[2]
     W, WA, WB, res = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4], fv[_RES:_RES + 10]
     V, VA, VB = fs[_V:_V + _NVMAX], fs[_VA:_VA + _NVMAX], fs[_VB:_VB + _NVMAX]
     FN, FD = fs[_FN:_FN + EPA_MAX_FACES], fv[_FD:_FD + EPA_MAX_FACES]
@@ -664,7 +667,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     vis = iv[_IS:_IS + EPA_MAX_FACES, 2]
     cands = iv[_IC:_IC + EPA_MAX_FACES, 0]
     vlist = iv[_IC:_IC + EPA_MAX_FACES, 1]
-    cin = ws.fs[_T3 + 12]
+    cin = ws[0][_T3 + 12]
     for c in range(3):
         cin[c] = 0.0
     for f in range(4):
@@ -684,7 +687,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     for f in range(4):
         _face_setup(V, F, FN, FD, f, cin)
         alive[f] = True
-    d, wa, wb, w = ws.fs[_T3 + 8], ws.fs[_T3 + 9], ws.fs[_T3 + 10], ws.fs[_T3 + 11]
+    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     tol = EPA_REL_TOL * scale
     vis_tol = EPA_DEGEN_TOL * scale
     best = 0
@@ -692,7 +695,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     converged = False
     # best upper bound on the depth: min over evaluated unit directions of h(d)
     ub = np.inf
-    ud, uwa = ws.fs[_T3 + 13], ws.fs[_T3 + 14]
+    ud, uwa = ws[0][_T3 + 13], ws[0][_T3 + 14]
     for c in range(3):
         ud[c] = 0.0
         uwa[c] = 0.0
@@ -812,11 +815,11 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             slot = f + 1
         nv += 1
     if best < 0:
-        return it, False, np.inf
+        return it, False, np.inf, False
     # witness: projection of the origin on the best face, in barycentric coordinates
     i, j, k = F[best, 0], F[best, 1], F[best, 2]
     dep = FD[best]
-    l3 = ws.fv[_L3:_L3 + 3]
+    l3 = ws[1][_L3:_L3 + 3]
     l3[0], l3[1], l3[2], dd = _tri_closest(V[i, 0], V[i, 1], V[i, 2], V[j, 0], V[j, 1],
                                            V[j, 2], V[k, 0], V[k, 1], V[k, 2])
     # barycentric coordinates of the projection p = dep * n of the origin on the face
@@ -829,6 +832,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     ny = uz * wx - ux * wz
     nz = ux * wy - uy * wx
     nn = nx * nx + ny * ny + nz * nz
+    clean = False
     if nn > 0.0:
         bx, by, bz = V[j, 0] - px, V[j, 1] - py, V[j, 2] - pz
         cx, cy, cz = V[k, 0] - px, V[k, 1] - py, V[k, 2] - pz
@@ -838,6 +842,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         m1 = (nx * (cy * az - cz * ay) + ny * (cz * ax - cx * az)
               + nz * (cx * ay - cy * ax)) / nn
         m2 = 1.0 - m0 - m1
+        # inside the face: the witnesses are convex combinations of support points
+        clean = min(m0, min(m1, m2)) >= -1e-9 and max(m0, max(m1, m2)) <= 1.0 + 1e-9
         # far outside the face means a sliver face: keep the clamped closest point
         if min(m0, min(m1, m2)) > -0.1 and max(m0, max(m1, m2)) < 1.1:
             l3[0], l3[1], l3[2] = m0, m1, m2
@@ -861,7 +867,39 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             res[1 + c] = ud[c]
             res[4 + c] = uwa[c]
             res[7 + c] = uwa[c] - ub * ud[c]
-    return it, converged, ub - lb
+    return it, converged, ub - lb, clean
+
+
+@njit_kernel
+def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
+    """Witness points for an EPA result whose origin projection fell outside its face
+    (sliver faces of flat or face-to-face contacts; the barycentric witnesses would then
+    leave the shapes).  B's core is moved out along the normal by the depth plus
+    EPA_WITNESS_SHIFT * scale, just apart, and GJK gives the closest points there
+    (convex combinations of support points: on the cores); B's point is moved back and
+    the pair is made to satisfy pb - pa == -depth * n by splitting the remainder (at most
+    ~the shift).  Updates res[4:10] (A's frame) and returns the GJK iterations, or 0
+    and leaves res as it is when GJK does not report the shapes apart."""
+    dep = res[0]
+    sh = dep + EPA_WITNESS_SHIFT * scale
+    t2 = ws[0][_T3 + 13]
+    for c in range(3):
+        t2[c] = t_ab[c] + sh * res[1 + c]
+    n, it, flag = _gjk(sa, sb, verts, r_ab, t2, True, scale, ws)
+    if flag != _GJK_APART:
+        return 0
+    fs, fv = ws[0], ws[1]
+    for c in range(3):
+        pa = 0.0
+        pb = 0.0
+        for i in range(n):
+            pa += fv[_LAM + i] * fs[_WA + i, c]
+            pb += fv[_LAM + i] * fs[_WB + i, c]
+        pb -= sh * res[1 + c]
+        corr = 0.5 * ((pb - pa) + dep * res[1 + c])
+        res[4 + c] = pa + corr
+        res[7 + c] = pb - corr
+    return it
 
 
 @njit_kernel
@@ -883,7 +921,7 @@ def gjk_epa(sa, sb, verts, r_ab, t_ab, out):
 @njit_kernel
 def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
     """``gjk_epa`` with caller-provided scratch buffers ``ws`` (make_gjk_workspace())."""
-    nrm, pa, pb = ws.fs[_T3 + 0], ws.fs[_T3 + 1], ws.fs[_T3 + 2]
+    nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
     _fallback_normal(t_ab, nrm)
     for c in range(3):
         pa[c] = 0.0
@@ -896,7 +934,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
         out[OUT_METHOD] = M_GJK_EPA
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)
-    fs, fv = ws.fs, ws.fv
+    fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
     # phase 1: cores
@@ -918,7 +956,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
         st = _set_out(out, vn - ra - rb, nrm[0], nrm[1], nrm[2], pa, pb, iters, scale)
         if flag == _GJK_CAP and st != ST_FAILED:
             # accept the estimate only when the last duality gap was small
-            d, wa, wb, w = ws.fs[_T3 + 4], ws.fs[_T3 + 5], ws.fs[_T3 + 6], ws.fs[_T3 + 7]
+            d, wa, wb, w = ws[0][_T3 + 4], ws[0][_T3 + 5], ws[0][_T3 + 6], ws[0][_T3 + 7]
             for c in range(3):
                 d[c] = -v[c]
             ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
@@ -954,11 +992,13 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
                 pb[c] = pa[c] - ra * nrm[c] - rb * nrm[c]
             return _set_out(out, -(ra + rb), nrm[0], nrm[1], nrm[2], pa, pb, iters,
                             scale)
-    res = ws.fv[_RES:_RES + 10]
+    res = ws[1][_RES:_RES + 10]
     for c in range(10):
         res[c] = 0.0
-    it, conv, gap = _epa(sa, sb, verts, r_ab, t_ab, scale, ws, True)
+    it, conv, gap, clean = _epa(sa, sb, verts, r_ab, t_ab, scale, ws, True)
     iters += it
+    if conv and not clean:
+        iters += _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res)
     for c in range(3):
         pa[c] = res[4 + c] + ra * res[1 + c]
         pb[c] = res[7 + c] - rb * res[1 + c]

@@ -25,11 +25,14 @@ world frame).  This module turns face-on-face contacts into the full manifold:
      plane is <= ``keep_dist`` (m) are contacts: the point on the incident body and its
      projection on the reference face.  No point left: the narrow phase's one point.
 
-Persistence (``persist_batch``, the arbiters' kernel, serial so ids are deterministic):
-stored contacts are refreshed from the bodies' frames and dropped past the drift
-threshold, matched to the new manifold by distance, reduced to ``max_contacts``
-(deepest, farthest, then largest hull area: Bullet's ``sortCachedPoints``, Jolt's
-``PruneContactPoints``), and the surviving new ones get ids; see arbiters.py.
+Persistence (``arbiter_step``, the arbiters' kernel, one serial pass so ids are
+deterministic): the previous step's arbiters are merged with this step's touching and
+undecided pairs by sorted key; each arbiter's stored contacts are refreshed from the
+bodies' frames, matched to the new manifold by distance, the unmatched ones dropped past
+the drift threshold, the set reduced to ``max_contacts`` (deepest, farthest, then
+largest hull area: Bullet's ``sortCachedPoints``, Jolt's ``PruneContactPoints``), and
+the surviving new ones get ids; events and the compacted new state are written to
+preallocated arrays.  See arbiters.py.
 
 Output per pair of ``manifold_batch`` (fixed slots, thread-count independent): up to MAX_MANIFOLD contacts
 ``cpts[k, c] = (point_a (3,), point_b (3,), distance)`` in the world frame (m), with
@@ -81,15 +84,6 @@ def _mv(r, v):
 
 
 @njit_kernel
-def _mtv(r, v):
-    """r^T (3, 3) times v (3,)."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = r[0, i] * v[0] + r[1, i] * v[1] + r[2, i] * v[2]
-    return out
-
-
-@njit_kernel
 def _feature(code, prm, verts, v0, vn, d, poly, fn):
     """Supporting feature of a shape along the unit direction ``d`` (3,) (body frame).
 
@@ -101,11 +95,13 @@ def _feature(code, prm, verts, v0, vn, d, poly, fn):
     dx, dy, dz = d[0], d[1], d[2]
     count = 0
     if code == BOX:
-        ax = np.abs(d)
+        ax0, ax1, ax2 = abs(dx), abs(dy), abs(dz)
         k = 0
-        if ax[1] > ax[k]:
+        best = ax0
+        if ax1 > best:
             k = 1
-        if ax[2] > ax[k]:
+            best = ax1
+        if ax2 > best:
             k = 2
         s = 1.0 if d[k] >= 0.0 else -1.0
         u = (k + 1) % 3
@@ -198,30 +194,59 @@ def _feature(code, prm, verts, v0, vn, d, poly, fn):
 
 @njit_kernel
 def _order_by_angle(poly, count, d):
-    """Sort ``poly[:count]`` by angle about their centroid, around the axis ``d``."""
-    cx = np.zeros(3)
+    """Sort ``poly[:count]`` by angle about their centroid, around the axis ``d``
+    (stable insertion sort, count <= MAX_FEATURE; scalar code, one small temporary)."""
+    cx = 0.0
+    cy = 0.0
+    cz = 0.0
     for c in range(count):
-        cx += poly[c]
+        cx += poly[c, 0]
+        cy += poly[c, 1]
+        cz += poly[c, 2]
     cx /= count
+    cy /= count
+    cz /= count
     # a basis (u, v) of the plane perpendicular to d
-    u = np.zeros(3)
+    ux = 0.0
+    uy = 0.0
+    uz = 0.0
     if abs(d[0]) < 0.57:
-        u[0] = 1.0
+        ux = 1.0
     elif abs(d[1]) < 0.57:
-        u[1] = 1.0
+        uy = 1.0
     else:
-        u[2] = 1.0
-    u -= _dot(u, d) * d
-    u /= math.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2)
-    v = _cross(d, u)
+        uz = 1.0
+    du = ux * d[0] + uy * d[1] + uz * d[2]
+    ux -= du * d[0]
+    uy -= du * d[1]
+    uz -= du * d[2]
+    nu = math.sqrt(ux ** 2 + uy ** 2 + uz ** 2)
+    ux /= nu
+    uy /= nu
+    uz /= nu
+    vx = d[1] * uz - d[2] * uy
+    vy = d[2] * ux - d[0] * uz
+    vz = d[0] * uy - d[1] * ux
     ang = np.empty(count)
     for c in range(count):
-        w = poly[c] - cx
-        ang[c] = math.atan2(_dot(w, v), _dot(w, u))
-    idx = np.argsort(ang, kind="mergesort")
-    tmp = poly[:count].copy()
-    for c in range(count):
-        poly[c] = tmp[idx[c]]
+        wx = poly[c, 0] - cx
+        wy = poly[c, 1] - cy
+        wz = poly[c, 2] - cz
+        ang[c] = math.atan2(wx * vx + wy * vy + wz * vz, wx * ux + wy * uy + wz * uz)
+    for c in range(1, count):
+        a = ang[c]
+        p0, p1, p2 = poly[c, 0], poly[c, 1], poly[c, 2]
+        q = c - 1
+        while q >= 0 and ang[q] > a:
+            ang[q + 1] = ang[q]
+            poly[q + 1, 0] = poly[q, 0]
+            poly[q + 1, 1] = poly[q, 1]
+            poly[q + 1, 2] = poly[q, 2]
+            q -= 1
+        ang[q + 1] = a
+        poly[q + 1, 0] = p0
+        poly[q + 1, 1] = p1
+        poly[q + 1, 2] = p2
 
 
 @njit_kernel
@@ -232,25 +257,29 @@ def _to_world(poly, count, r, p, out):
 
 
 @njit_kernel
-def _clip(subject, ns, pnt, nrm, out):
-    """Clip polygon ``subject[:ns]`` (world) by the half-space (x - pnt) . nrm >= 0;
-    write the result in ``out`` and return its count (Sutherland-Hodgman, one plane)."""
+def _clip(subject, ns, px, py, pz, nx, ny, nz, out):
+    """Clip polygon ``subject[:ns]`` (world) by the half-space (x - p) . n >= 0, with
+    p = (px, py, pz), n = (nx, ny, nz); write the result in ``out`` and return its count
+    (Sutherland-Hodgman, one plane; scalar code, no temporaries)."""
     no = 0
     if ns == 0:
         return 0
+    cap = out.shape[0]
     for c in range(ns):
-        a = subject[c]
-        b = subject[(c + 1) % ns]
-        da = (a[0] - pnt[0]) * nrm[0] + (a[1] - pnt[1]) * nrm[1] + (a[2] - pnt[2]) * nrm[2]
-        db = (b[0] - pnt[0]) * nrm[0] + (b[1] - pnt[1]) * nrm[1] + (b[2] - pnt[2]) * nrm[2]
+        c2 = (c + 1) % ns
+        da = (subject[c, 0] - px) * nx + (subject[c, 1] - py) * ny + (subject[c, 2] - pz) * nz
+        db = ((subject[c2, 0] - px) * nx + (subject[c2, 1] - py) * ny
+              + (subject[c2, 2] - pz) * nz)
         if da >= 0.0:
-            if no < out.shape[0]:
-                out[no] = a
+            if no < cap:
+                for i in range(3):
+                    out[no, i] = subject[c, i]
                 no += 1
         if (da >= 0.0) != (db >= 0.0) and ns > 1:
             t = da / (da - db)
-            if no < out.shape[0]:
-                out[no] = a + t * (b - a)
+            if no < cap:
+                for i in range(3):
+                    out[no, i] = subject[c, i] + t * (subject[c2, i] - subject[c, i])
                 no += 1
     return no
 
@@ -272,16 +301,19 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
     if ca <= ELLIPSOID or cb <= ELLIPSOID:
         # a sphere or an ellipsoid only ever presents one point
         return _single(row, cpts_k, cn_k)
-    ra, rb, fa, fb, fna, fnb, ref_pts, inc_pts, buf0, buf1 = ws
+    ra, rb, fa, fb, fna, fnb, ref_pts, inc_pts, buf0, buf1, da, db = ws
     n = row[OUT_NORMAL:OUT_NORMAL + 3].copy()
     quat_to_matrix_into(quat_w[ia], ra)
     quat_to_matrix_into(quat_w[ib], rb)
+    for i in range(3):      # n in A's frame, -n in B's frame
+        da[i] = ra[0, i] * n[0] + ra[1, i] * n[1] + ra[2, i] * n[2]
+        db[i] = -(rb[0, i] * n[0] + rb[1, i] * n[1] + rb[2, i] * n[2])
     na = 0
     nb = 0
     if ca != PLANE:
-        na = _feature(ca, params[ia], verts, vrange[ia, 0], vrange[ia, 1], _mtv(ra, n), fa, fna)
+        na = _feature(ca, params[ia], verts, vrange[ia, 0], vrange[ia, 1], da, fa, fna)
     if cb != PLANE:
-        nb = _feature(cb, params[ib], verts, vrange[ib, 0], vrange[ib, 1], -_mtv(rb, n), fb, fnb)
+        nb = _feature(cb, params[ib], verts, vrange[ib, 0], vrange[ib, 1], db, fb, fnb)
     # reference face: point, outward normal (world); which side is the reference
     ref_is_a = True
     n_ref = np.zeros(3)
@@ -326,43 +358,63 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
             return _single(row, cpts_k, cn_k)
     if ni < 2 or nr == 0 or nr == 1:
         return _single(row, cpts_k, cn_k)
-    # clip the incident polygon by the reference face's side planes
+    # clip the incident polygon by the reference face's side planes (scalar code)
     for c in range(ni):
-        buf0[c] = inc_pts[c]
+        for i in range(3):
+            buf0[c, i] = inc_pts[c, i]
     cnt = ni
+    nx, ny, nz = n_ref[0], n_ref[1], n_ref[2]
     if nr == 2:
-        e = ref_pts[1] - ref_pts[0]
-        cnt = _clip(buf0, cnt, ref_pts[0], e, buf1)
-        cnt = _clip(buf1, cnt, ref_pts[1], -e, buf0)
+        ex = ref_pts[1, 0] - ref_pts[0, 0]
+        ey = ref_pts[1, 1] - ref_pts[0, 1]
+        ez = ref_pts[1, 2] - ref_pts[0, 2]
+        cnt = _clip(buf0, cnt, ref_pts[0, 0], ref_pts[0, 1], ref_pts[0, 2], ex, ey, ez, buf1)
+        cnt = _clip(buf1, cnt, ref_pts[1, 0], ref_pts[1, 1], ref_pts[1, 2], -ex, -ey, -ez,
+                    buf0)
     elif nr >= 3:
-        cen = np.zeros(3)
+        cx = 0.0
+        cy = 0.0
+        cz = 0.0
         for c in range(nr):
-            cen += ref_pts[c]
-        cen /= nr
+            cx += ref_pts[c, 0]
+            cy += ref_pts[c, 1]
+            cz += ref_pts[c, 2]
+        cx /= nr
+        cy /= nr
+        cz /= nr
         for c in range(nr):
-            a = ref_pts[c]
-            b = ref_pts[(c + 1) % nr]
-            side = _cross(n_ref, b - a)
-            if _dot(side, cen - a) < 0.0:
-                side = -side
-            cnt = _clip(buf0, cnt, a, side, buf1)
+            c2 = (c + 1) % nr
+            ax, ay, az = ref_pts[c, 0], ref_pts[c, 1], ref_pts[c, 2]
+            ex = ref_pts[c2, 0] - ax
+            ey = ref_pts[c2, 1] - ay
+            ez = ref_pts[c2, 2] - az
+            sx = ny * ez - nz * ey
+            sy = nz * ex - nx * ez
+            sz = nx * ey - ny * ex
+            if sx * (cx - ax) + sy * (cy - ay) + sz * (cz - az) < 0.0:
+                sx = -sx
+                sy = -sy
+                sz = -sz
+            cnt = _clip(buf0, cnt, ax, ay, az, sx, sy, sz, buf1)
             for q in range(cnt):
-                buf0[q] = buf1[q]
+                for i in range(3):
+                    buf0[q, i] = buf1[q, i]
     # keep the points below the reference plane (+ keep_dist)
     out = 0
     for c in range(cnt):
-        p = buf0[c]
-        sep = _dot(n_ref, p - ref_pts[0])
+        sep = (nx * (buf0[c, 0] - ref_pts[0, 0]) + ny * (buf0[c, 1] - ref_pts[0, 1])
+               + nz * (buf0[c, 2] - ref_pts[0, 2]))
         if not (sep <= keep_dist):
             continue
-        q = p - sep * n_ref
         for i in range(3):
+            p = buf0[c, i]
+            q = p - sep * n_ref[i]
             if ref_is_a:
-                cpts_k[out, i] = q[i]
-                cpts_k[out, 3 + i] = p[i]
+                cpts_k[out, i] = q
+                cpts_k[out, 3 + i] = p
             else:
-                cpts_k[out, i] = p[i]
-                cpts_k[out, 3 + i] = q[i]
+                cpts_k[out, i] = p
+                cpts_k[out, 3 + i] = q
         cpts_k[out, 6] = sep
         out += 1
     if out == 0:
@@ -409,7 +461,8 @@ def _workspace():
     return (np.empty((3, 3)), np.empty((3, 3)), np.zeros((MAX_FEATURE, 3)),
             np.zeros((MAX_FEATURE, 3)), np.zeros(3), np.zeros(3),
             np.zeros((MAX_FEATURE, 3)), np.zeros((MAX_FEATURE, 3)),
-            np.zeros((MAX_MANIFOLD, 3)), np.zeros((MAX_MANIFOLD, 3)))
+            np.zeros((MAX_MANIFOLD, 3)), np.zeros((MAX_MANIFOLD, 3)), np.zeros(3),
+            np.zeros(3))
 
 
 @njit_parallel

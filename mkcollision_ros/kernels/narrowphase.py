@@ -21,12 +21,10 @@ Method codes (constants.M_*):
 Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
 the requested method code.
 """
-from collections import namedtuple
-
 import numpy as np
 
 from .analytic import box_box_sat, classify, closed_form_ordered, collide_analytic
-from .constants import (BOX, CAPSULE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
                         M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
                         ST_NOT_RUN)
@@ -39,28 +37,29 @@ from .mpr import mpr
 # subdivision level passed to ellipsoid_sampled by the dispatcher
 ELLIPSOID_SAMPLED_SUBDIV = 3
 
-# Scratch buffers of one chunk of pairs, few arrays (numba reference-counts each array
-# passed to a function): m float64 (14, 3) = world rotations ra (rows 0-2), rb (3-5),
-# the relative pose r_ab (6-8) / t_ab (9), the swapped pose r_ba (10-12) / t_ba (13);
-# rows float64 (2, OUT_SIZE) = result rows row and tmp; gjk = gjk_epa.GjkWorkspace.
-Workspace = namedtuple("Workspace", ("m", "rows", "gjk"))
+# Scratch buffers ``ws`` of one chunk of pairs, a plain tuple (m, rows, gjk) of few
+# arrays (numba reference-counts each array passed to a function): m float64 (14, 3) =
+# world rotations ra (rows 0-2), rb (3-5), the relative pose r_ab (6-8) / t_ab (9), the
+# swapped pose r_ba (10-12) / t_ba (13); rows float64 (2, OUT_SIZE) = result rows row
+# and tmp; gjk = gjk_epa.make_gjk_workspace().
 
 
 @njit_kernel
 def make_workspace():
     """Fresh scratch buffers for ``collide_pair_ws`` / ``collide_world_ws``."""
-    return Workspace(np.empty((14, 3)), np.empty((2, OUT_SIZE)), make_gjk_workspace())
+    return (np.empty((14, 3)), np.empty((2, OUT_SIZE)), make_gjk_workspace())
 
 
 @njit_kernel
 def _has_closed_form(code_a, code_b):
     """True when analytic.closed_form_ordered handles the ordered pair (code_a <=
-    code_b): a half-space B with any other shape, sphere with sphere, box, capsule or
-    cylinder, capsule with capsule."""
+    code_b): a half-space B with any other shape, sphere with sphere, box, capsule,
+    cylinder or cone, capsule with capsule."""
     if code_b == PLANE:
         return code_a != PLANE
     if code_a == SPHERE:
-        return code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
+        return (code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
+                or code_b == CONE)
     return code_a == CAPSULE and code_b == CAPSULE
 
 
@@ -81,16 +80,16 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
         st = box_box_sat(sa, sb, r_ab, t_ab, out)
         if st != ST_NOT_RUN:
             return st
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
     if method == M_AUTO or method == M_ANALYTIC:
         st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
         if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
             if st == ST_NOT_RUN:
                 _blank(out, method)
             return st
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
     if method == M_GJK_EPA:
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws.gjk)
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
@@ -121,7 +120,7 @@ def collide_pair(sa, sb, verts, r_ab, t_ab, method, out):
 @njit_kernel
 def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws):
     """``collide_pair`` with caller-provided scratch buffers ``ws`` (make_workspace());
-    ``r_ab``/``t_ab`` may be ws.m[6:9]/ws.m[9] (only r_ba, t_ba, tmp, gjk are written)."""
+    ``r_ab``/``t_ab`` may be ws[0][6:9]/ws[0][9] (only r_ba, t_ba, tmp, gjk are written)."""
     _blank(out, method)
     if sa[0] <= sb[0]:
         st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws)
@@ -129,14 +128,14 @@ def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws):
             _blank(out, method)
         return st
     # swap to canonical order: solve (B, A) in B's frame, then map back
-    r_ba = ws.m[10:13]
-    t_ba = ws.m[13]
+    r_ba = ws[0][10:13]
+    t_ba = ws[0][13]
     for i in range(3):
         for j in range(3):
             r_ba[i, j] = r_ab[j, i]
     for i in range(3):
         t_ba[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
-    tmp = ws.rows[1]
+    tmp = ws[1][1]
     _blank(tmp, method)
     st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp, ws)
     if st == ST_NOT_RUN:
@@ -175,12 +174,12 @@ def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a
 def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
                      pos_b, quat_b, method, out, ws):
     """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())."""
-    ra = ws.m[0:3]
-    rb = ws.m[3:6]
+    ra = ws[0][0:3]
+    rb = ws[0][3:6]
     quat_to_matrix_into(quat_a, ra)
     quat_to_matrix_into(quat_b, rb)
-    r_ab = ws.m[6:9]
-    t_ab = ws.m[9]
+    r_ab = ws[0][6:9]
+    t_ab = ws[0][9]
     for i in range(3):
         t_ab[i] = (ra[0, i] * (pos_b[0] - pos_a[0]) + ra[1, i] * (pos_b[1] - pos_a[1])
                    + ra[2, i] * (pos_b[2] - pos_a[2]))
@@ -188,7 +187,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
             r_ab[i, j] = ra[0, i] * rb[0, j] + ra[1, i] * rb[1, j] + ra[2, i] * rb[2, j]
     sa = (code_a, prm_a, vr_a[0], vr_a[1])
     sb = (code_b, prm_b, vr_b[0], vr_b[1])
-    row = ws.rows[0]
+    row = ws[1][0]
     if ((method == M_AUTO or method == M_ANALYTIC) and code_a <= code_b
             and _has_closed_form(code_a, code_b)):
         # fast path, same result as collide_pair_ws: fewer call levels (each passes

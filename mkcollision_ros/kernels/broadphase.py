@@ -23,21 +23,22 @@ Phases
 
 The reported set is EXACTLY the pairs whose closed AABB intervals overlap on all three
 axes (plus the plane rule above), as int64 (P, 2) rows (i, j), i < j, sorted
-lexicographically; every loop writes into fixed slots (two passes: count, then write
-each row's sorted keys at its offset), so the output does not depend on the thread
-count or on the visiting order.
+lexicographically; every loop writes into fixed slots (each row keeps up to
+GRID_ROW_SLOTS sorted keys in its own slots while counting; rows with more run again
+into their final offsets), so the output does not depend on the thread count or on
+the visiting order.
 
 Why a grid (it replaced sweep-and-prune, which was kept until the 10,000-body pipeline
 benchmark).  Measured, one thread, median of 9, on the shared 2-core machine while
 another engineer's jobs ran (so read ratios, not absolutes), identical pairs:
 
     scene                                     pairs    SAP (warm)   grid
-    bench scene, 10,000 bodies, 0.2 per body   4,412   12-18 ms     8-13 ms
-    bench scene, 10,000 bodies, 2 per body    42,978   54-58 ms    27-32 ms
-    same as the first plus 1 % 8 m slabs      24,755   19-21 ms    36-39 ms
-    10,000 bodies on a line                   12,342  1.5-1.9 ms  2.6-3.8 ms
-    500 bodies stacked at one point          124,750   13-18 ms    3.2-5 ms
-    bench scene, 1,000 bodies, 0.2 per body      432  0.45-0.6 ms 0.5-0.75 ms
+    bench scene, 10,000 bodies, 0.2 per body   4,412   12-18 ms     6.7 ms
+    bench scene, 10,000 bodies, 2 per body    42,978   51-58 ms      17 ms
+    same as the first plus 1 % 8 m slabs      24,755   19-21 ms      26 ms
+    10,000 bodies on a line                   12,342  1.3-1.9 ms    1.7 ms
+    500 bodies stacked at one point          124,750   13-18 ms     3.2 ms
+    bench scene, 1,000 bodies, 0.2 per body      432  0.45-0.6 ms 0.5-0.6 ms
 
 SAP tests every body against all the bodies whose x-interval it overlaps, which in a
 uniform 3-D scene is ~N^(1/3) times the true neighbours; the grid only sees the cells
@@ -64,6 +65,8 @@ GRID_CELL_SCALE = 1.5
 # a body spanning more than this many cells is not put in the grid but tested against
 # every body (a ground slab of 8 x 8 m among 1 m parts spans ~60 cells: still gridded)
 GRID_BIG_CELLS = 256
+# keys a row keeps in its fixed slots in the first pass (rows with more run again)
+GRID_ROW_SLOTS = 16
 # at most this many cells along an axis (the cell grows for very spread scenes; keys
 # pack each cell coordinate in 21 bits)
 GRID_MAX_CELLS = 1 << 20
@@ -200,32 +203,40 @@ def _cell_key(ix, iy, iz):
 
 @njit_parallel
 def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
-              e_body, e_key, e_cmin, e_box, n, counts, write, out, offsets):
+              e_body, e_key, e_cmin, e_box, n, counts, write, out, offsets, slots):
     """Pairs (i, j), i < j, of each body i = bodies[r] (see ``find_pairs``): its grid
     neighbours through the shared cells, plus every big body; a big body's row tests
-    every later body.  Stores each row's count in ``counts[r]``; with ``write`` also
-    its keys i * n + j, ascending, from out[offsets[r]].  The entries of each bucket
-    (e_body rank, e_key cell, e_cmin (E, 3) the body's first cell, e_box (E, 6) its
-    AABB lo, hi) are copied in bucket order so that a scan reads contiguous memory.  (One loop body, no calls:
-    a call per row with a dozen array arguments costs ~0.3 us of reference counting.)
+    every later body.  Without ``write``: stores each row's count in ``counts[r]`` and
+    its first slots.shape[1] keys i * n + j in ``slots[r]`` (ascending when they all
+    fit).  With ``write``: runs again only the rows that did not fit, writing their
+    keys, ascending, from out[offsets[r]].  The entries of each bucket (e_body rank,
+    e_key cell, e_cmin (E, 3) the body's first cell, e_box (E, 6) its AABB lo, hi) are
+    copied in bucket order so that a scan reads contiguous memory.  (One loop body, no
+    calls taking arrays: a call per row with a dozen array arguments costs ~0.3 us of
+    reference counting.)
     """
     m = bodies.shape[0]
     for q in prange(m):
         r = order[q]      # rows in space-filling order (cache), each in its own slots
         i = bodies[r]
         c = 0
-        base = offsets[r] if write else 0
-        if write and offsets[r + 1] == base:
-            counts[r] = 0
-            continue
+        cap = slots.shape[1]
+        if write:
+            base = offsets[r]
+            if offsets[r + 1] - base <= cap:     # done by the first pass
+                continue
+            dst = out
+        else:
+            base = r * cap
+            dst = slots.reshape(-1)
         if is_big[r]:
             for t in range(r + 1, m):
                 j = bodies[t]
                 if (lo[i, 0] <= hi[j, 0] and lo[j, 0] <= hi[i, 0] and lo[i, 1] <= hi[j, 1]
                         and lo[j, 1] <= hi[i, 1] and lo[i, 2] <= hi[j, 2]
                         and lo[j, 2] <= hi[i, 2]):
-                    if write:
-                        out[base + c] = i * n + j
+                    if write or c < cap:
+                        dst[base + c] = i * n + j
                     c += 1
         else:
             for b in range(big.shape[0]):
@@ -236,8 +247,8 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
                 if (lo[i, 0] <= hi[j, 0] and lo[j, 0] <= hi[i, 0] and lo[i, 1] <= hi[j, 1]
                         and lo[j, 1] <= hi[i, 1] and lo[i, 2] <= hi[j, 2]
                         and lo[j, 2] <= hi[i, 2]):
-                    if write:
-                        out[base + c] = i * n + j
+                    if write or c < cap:
+                        dst[base + c] = i * n + j
                     c += 1
             x0, y0, z0 = cmin[r, 0], cmin[r, 1], cmin[r, 2]
             lo0, lo1, lo2 = lo[i, 0], lo[i, 1], lo[i, 2]
@@ -260,18 +271,18 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
                             if (lo0 <= e_box[e, 3] and e_box[e, 0] <= hi0
                                     and lo1 <= e_box[e, 4] and e_box[e, 1] <= hi1
                                     and lo2 <= e_box[e, 5] and e_box[e, 2] <= hi2):
-                                if write:
-                                    out[base + c] = i * n + bodies[t]
+                                if write or c < cap:
+                                    dst[base + c] = i * n + bodies[t]
                                 c += 1
-            if write:
-                # the row's keys ascending (few per row: insertion sort)
-                for a in range(base + 1, base + c):
-                    v = out[a]
-                    d = a - 1
-                    while d >= base and out[d] > v:
-                        out[d + 1] = out[d]
-                        d -= 1
-                    out[d + 1] = v
+        # the row's keys ascending (few per row: insertion sort)
+        if write or c <= cap:
+            for a in range(base + 1, base + c):
+                v = dst[a]
+                d = a - 1
+                while d >= base and dst[d] > v:
+                    dst[d + 1] = dst[d]
+                    d -= 1
+                dst[d + 1] = v
         counts[r] = c
 
 
@@ -440,19 +451,29 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
         new_order[q] = big[b]
         q += 1
     # --- body pairs: count per row, then write each row's keys sorted in its slot
+    # (one pass writes up to GRID_ROW_SLOTS keys per row into fixed slots and counts;
+    # only rows with more are run again, straight into the output)
     counts = np.zeros(m, np.int64)
     offsets = np.zeros(m + 1, np.int64)
+    slots = np.empty((m, GRID_ROW_SLOTS), np.int64)
     dummy = np.empty(0, np.int64)
     _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
-              e_body, e_key, e_cmin, e_box, n, counts, False, dummy, offsets)
+              e_body, e_key, e_cmin, e_box, n, counts, False, dummy, offsets, slots)
+    n_over = 0
     for r in range(m):
         offsets[r + 1] = offsets[r] + counts[r]
+        if counts[r] > GRID_ROW_SLOTS:
+            n_over += 1
     n_body_pairs = offsets[m]
     body_keys = np.empty(n_body_pairs, np.int64)
-    if n_body_pairs > 0:
+    for r in range(m):
+        if counts[r] <= GRID_ROW_SLOTS:
+            for c in range(counts[r]):
+                body_keys[offsets[r] + c] = slots[r, c]
+    if n_over > 0:
         _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift,
                   bucket_start, e_body, e_key, e_cmin, e_box, n, counts, True, body_keys,
-                  offsets)
+                  offsets, slots)
     # --- planes against every body reaching their half-space
     hit = np.zeros((n_planes, m), np.bool_)
     if n_planes > 0 and m > 0:

@@ -218,3 +218,30 @@ def test_never_nan_on_hard_inputs():
             assert math.isfinite(r.distance)
             assert np.all(np.isfinite(r.normal)) and np.all(np.isfinite(r.point_a))
             assert abs(np.linalg.norm(r.normal) - 1.0) < 1e-9
+
+
+def test_ellipsoid_methods_decide_status_and_report_metric_geometry():
+    """The ellipsoid tests say whether the pair touches; distance, normal and points are
+    GJK/EPA's, in metres (the kernels' own gap is in A's unit-sphere frame)."""
+    e = {"type": "ellipsoid", "radii": [2.0, 0.5, 0.5]}
+    s = {"type": "sphere", "radius": 0.5}
+    for x, touching in ((2.4, True), (2.6, False)):
+        ref = collide(e, ID, s, ([x, 0.0, 0.0], [0, 0, 0, 1]), method="gjk_epa")
+        for method in ("ellipsoid_exact", "ellipsoid_sampled"):
+            r = collide(e, ID, s, ([x, 0.0, 0.0], [0, 0, 0, 1]), method=method)
+            assert r.method == method and r.touching == touching
+            assert r.distance == pytest.approx(x - 2.5, abs=1e-9)
+            assert r.distance == pytest.approx(ref.distance, abs=1e-12)
+            np.testing.assert_allclose(r.normal, [1.0, 0.0, 0.0], atol=1e-9)
+
+
+def test_mpr_touching_rule_at_an_exact_kiss():
+    """MPR alone reports SEPARATED with a ~0 lower bound for exactly touching boxes
+    (found by the regression corpus, fcl#398 scene); the same touching rule as every
+    other path must hold."""
+    box = {"type": "box", "size": [1.0, 1.0, 1.0]}
+    r = collide(box, ID, box, ([1.0, 0.3, 0.2], [0, 0, 0, 1]), method="mpr")
+    assert r.status == Status.TOUCHING and r.touching
+    assert abs(r.distance) <= 1e-9
+    apart = collide(box, ID, box, ([1.01, 0.3, 0.2], [0, 0, 0, 1]), method="mpr")
+    assert apart.status == Status.SEPARATED

@@ -13,11 +13,13 @@ on the thread count.
 Method codes (constants.M_*):
   M_AUTO               the closed form when one exists (kernels/analytic.py), else GJK/EPA
   M_GJK_EPA            kernels/gjk_epa.py (planes: ST_NOT_RUN)
-  M_MPR                kernels/mpr.py (planes: ST_NOT_RUN)
+  M_MPR                kernels/mpr.py (planes: ST_NOT_RUN); a separated answer inside
+                       the touching band is settled by GJK (the touching rule)
   M_ANALYTIC           kernels/analytic.py (ST_NOT_RUN for pairs without a closed form)
-  M_ELLIPSOID_EXACT    kernels/ellipsoid.py ``ellipsoid_exact`` (boolean test)
+  M_ELLIPSOID_EXACT    kernels/ellipsoid.py ``ellipsoid_exact`` decides the status;
+                       distance, normal and witness points are GJK/EPA's (metres)
   M_ELLIPSOID_SAMPLED  kernels/ellipsoid.py ``ellipsoid_sampled`` with
-                       ELLIPSOID_SAMPLED_SUBDIV subdivisions (boolean test)
+                       ELLIPSOID_SAMPLED_SUBDIV subdivisions, likewise
 Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
 the requested method code.
 """
@@ -27,7 +29,7 @@ from .analytic import box_box_sat, classify, closed_form_ordered, collide_analyt
 from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
                         M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
-                        ST_NOT_RUN)
+                        ST_NOT_RUN, ST_SEPARATED, TOUCH_TOL)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import quat_to_matrix_into, shape_scale
 from .gjk_epa import gjk_epa_ws, make_gjk_workspace
@@ -93,11 +95,31 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
-        return mpr(sa, sb, verts, r_ab, t_ab, out)
-    if method == M_ELLIPSOID_EXACT:
-        return ellipsoid_exact(sa, sb, r_ab, t_ab, out)
-    if method == M_ELLIPSOID_SAMPLED:
-        return ellipsoid_sampled(sa, sb, r_ab, t_ab, ELLIPSOID_SAMPLED_SUBDIV, out)
+        st = mpr(sa, sb, verts, r_ab, t_ab, out)
+        if st == ST_SEPARATED and out[OUT_DIST] <= TOUCH_TOL * shape_scale(sa, sb):
+            # MPR's distance for a separated pair is only a lower bound, so within the
+            # touching band it cannot tell touching from apart: GJK decides, and the
+            # one touching rule holds on this path too.
+            iters = out[OUT_ITERS]
+            st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+            out[OUT_ITERS] += iters
+            out[OUT_METHOD] = M_MPR
+        return st
+    if method == M_ELLIPSOID_EXACT or method == M_ELLIPSOID_SAMPLED:
+        # The ellipsoid test decides the status (touching or not); its own distance is
+        # in the unit-sphere frame of A, so the metric distance, normal and witness
+        # points come from GJK/EPA on the same pair.
+        if method == M_ELLIPSOID_EXACT:
+            st = ellipsoid_exact(sa, sb, r_ab, t_ab, out)
+        else:
+            st = ellipsoid_sampled(sa, sb, r_ab, t_ab, ELLIPSOID_SAMPLED_SUBDIV, out)
+        if st == ST_NOT_RUN:
+            return st
+        iters = out[OUT_ITERS]
+        gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+        out[OUT_ITERS] += iters
+        out[OUT_METHOD] = method
+        return st
     return ST_NOT_RUN
 
 

@@ -948,6 +948,23 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
                 pb[c] += lam[i] * WB[i, c]
         for c in range(3):
             nrm[c] = -v[c] / vn  # v = pa - pb, normal from A to B
+        if n == 3 and lam[0] > 0.0 and lam[1] > 0.0 and lam[2] > 0.0:
+            # v is the origin's projection onto the triangle's plane.  When the pair is
+            # nearly touching |v| is tiny and its direction carries the rounding of the
+            # barycentric sum; the plane's normal from the edges does not, and the
+            # plane's offset is the same distance, better conditioned.
+            e1x, e1y, e1z = W[1, 0] - W[0, 0], W[1, 1] - W[0, 1], W[1, 2] - W[0, 2]
+            e2x, e2y, e2z = W[2, 0] - W[0, 0], W[2, 1] - W[0, 1], W[2, 2] - W[0, 2]
+            cx, cy, cz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+            cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+            if cn > 0.0:
+                cx, cy, cz = cx / cn, cy / cn, cz / cn
+                if cx * nrm[0] + cy * nrm[1] + cz * nrm[2] < 0.0:
+                    cx, cy, cz = -cx, -cy, -cz
+                off = -(cx * W[0, 0] + cy * W[0, 1] + cz * W[0, 2])
+                if off > 0.0 and cx * nrm[0] + cy * nrm[1] + cz * nrm[2] > 0.99:
+                    nrm[0], nrm[1], nrm[2] = cx, cy, cz
+                    vn = off
         ra = inflation(sa[0], sa[1])
         rb = inflation(sb[0], sb[1])
         for c in range(3):

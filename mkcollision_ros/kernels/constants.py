@@ -74,7 +74,6 @@ OUT_SIZE = 12
 
 # --- GJK / EPA extras (gjk_epa.py) -------------------------------------------------------
 GJK_ABS_TOL = 1e-12        # stop GJK when the distance bound gap < tol * scale (dimensionless)
-GJK_CORE_EPS = 1e-9        # (unused: GJK/EPA now switches to EPA only on exact core overlap)
 EPA_DEGEN_TOL = 1e-12      # flat Minkowski difference: volume/extent below tol * scale
 EPA_WITNESS_SHIFT = 1e-7   # witness fix-up: B pulled apart by depth + shift * scale (m/m)
 EPA_FAIL_GAP = 1e-4        # EPA caps hit: FAILED when upper - lower depth bound > tol * scale

@@ -34,6 +34,7 @@ from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world
 from .kernels.constants import M_AUTO, METHOD_NAMES, OUT_SIZE, PLANE, ST_FAILED
 from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
 from .kernels.narrowphase import collide_batch
+from .results import ContactSet
 from .shapes import build_table
 
 PIPELINE_METHODS = ("auto", "gjk_epa", "mpr")
@@ -128,8 +129,9 @@ class PipelineConfig:
 
 
 @dataclass
-class StepResult:
+class StepResult(ContactSet):
     """Contacts of one step, world frame, metres; C contacts over K touching pairs.
+    The contact fields are those of ``results.ContactSet``; a step adds the rest.
 
     names list[str] (N,); stamp float (s, as given)
     pairs int64 (K, 2): touching pairs (a < b), sorted
@@ -146,20 +148,8 @@ class StepResult:
     timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the filter;
     n_narrowphase_pairs: pairs after the filter
     """
-    names: list
     stamp: float
     pairs: np.ndarray
-    body_a: np.ndarray
-    body_b: np.ndarray
-    position: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    normal: np.ndarray
-    depth: np.ndarray
-    contact_id: np.ndarray
-    age: np.ndarray
-    method: np.ndarray
-    status: np.ndarray
     events: Events
     timings: dict
     n_candidate_pairs: int

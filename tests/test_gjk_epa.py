@@ -461,3 +461,28 @@ def test_near_touching_normal_certifies_the_distance_case_1271():
     lb, _ = O.signed_distance_oracle(c["sa"], pose_a, c["sb"], pose_b)
     assert lb <= r.distance + 1e-9 * scale
     assert r.distance - lb <= 1e-6 * scale
+
+
+# An apart ellipsoid-box pair from the 10,000-pair run (test_against_coal_random
+# [ellipsoid-box], case 4093), found when EPA started walking face adjacency: GJK built a
+# flat tetrahedron (three nearly equal support points) whose rounding-noise face
+# orientations passed the "origin inside" test with the origin 0.13 m off its plane, and
+# handed it to EPA.  The old EPA happened to recover; now a flat tetrahedron (6 |volume|
+# <= GJK_FLAT_TOL * longest edge^3) never counts as holding the origin, and EPA refuses a
+# start whose faces are not consistently oriented instead of expanding it.
+FLAT_TETRA_4093 = {"sa": {"type": "ellipsoid", "radii": [0.6519562655995701, 0.5067746184640042, 0.976064801242093]}, "pa": [-0.8733636366997193, 0.8262603567589, -0.24141831864079252], "qa": [0.12045826424626764, 0.5117919536733838, 0.18934968639657723, -0.8292801088844922], "sb": {"type": "box", "size": [1.0424166763047211, 0.7979707585757998, 0.5837698505907359]}, "pb": [0.3373464625092759, 0.7812998460846542, 0.34190541402468067], "qb": [0.17340756053708387, -0.7142966709943437, -0.47665169692163883, 0.48219627080339206]}
+
+
+def test_gjk_flat_tetrahedron_not_inside_case_4093():
+    c = FLAT_TETRA_4093
+    pose_a, pose_b = (c["pa"], c["qa"]), (c["pb"], c["qb"])
+    scale = O.bounding_radius(c["sa"]) + O.bounding_radius(c["sb"])
+    lb, _ = O.signed_distance_oracle(c["sa"], pose_a, c["sb"], pose_b)
+    for method in ("gjk_epa", "auto"):
+        r = collide(c["sa"], pose_a, c["sb"], pose_b, method=method)
+        h = O.cso_support(c["sa"], pose_a, c["sb"], pose_b, r.normal[None, :])[0]
+        assert r.status == ST_SEPARATED, method
+        assert abs(r.distance + h) <= 1e-9 * scale, method
+        assert abs(r.distance - lb) <= 1e-6 * scale, method
+    # MPR's distance for an apart pair is a lower bound only (docs/narrowphase-notes.md)
+    assert collide(c["sa"], pose_a, c["sb"], pose_b, method="mpr").status == ST_SEPARATED

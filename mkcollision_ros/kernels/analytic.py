@@ -44,7 +44,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, OUT_DIST, OUT_
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import inflation, shape_scale, support_full_xyz
-from .jit import njit_kernel
+from .jit import njit_inline, njit_kernel
 
 
 @njit_kernel
@@ -61,7 +61,7 @@ def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit_kernel
+@njit_inline
 def classify(dist, scale):
     """Status code of a signed distance (m) under the touching rule (constants.py)."""
     tol = TOUCH_TOL * scale
@@ -72,7 +72,7 @@ def classify(dist, scale):
     return ST_PENETRATING
 
 
-@njit_kernel
+@njit_inline
 def _finish_s(cax, cay, caz, core_dist, nx, ny, nz, ra, rb, out):
     """``_finish`` on scalars (allocation-free): core witness on A (cax, cay, caz),
     signed core distance along the unit normal (nx, ny, nz) (A -> B), radii."""
@@ -93,7 +93,7 @@ def _finish_s(cax, cay, caz, core_dist, nx, ny, nz, ra, rb, out):
     return dist
 
 
-@njit_kernel
+@njit_inline
 def _point_point_s(ax, ay, az, bx, by, bz, ra, rb, out):
     """Two inflated points (A frame): distance along b - a, +z when they coincide."""
     dx, dy, dz = bx - ax, by - ay, bz - az
@@ -629,7 +629,7 @@ def _box_feature_point_a(a, dx, dy, dz, fx, fy, fz):
     return x, y, z
 
 
-@njit_kernel
+@njit_inline
 def closed_form_ordered(sa, sb, verts, r_ab, t_ab, out):
     """Signed distance (m) of a pair in canonical order that has a closed form (the
     dispatcher checks which); writes ``out`` as ``collide_analytic`` does."""

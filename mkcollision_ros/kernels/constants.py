@@ -44,11 +44,12 @@ METHOD_NAMES = ("auto", "gjk_epa", "mpr", "analytic", "ellipsoid_exact", "ellips
 TOUCH_TOL = 1e-9
 
 # --- batch kernel ------------------------------------------------------------------------
-NP_CHUNK = 32              # pairs per chunk of collide_batch (one scratch workspace each)
+NP_CHUNK = 128             # pairs per chunk of collide_batch (one scratch workspace each)
 
 # --- GJK ---------------------------------------------------------------------------------
 GJK_MAX_ITERS = 128        # iterations (support evaluations)
 GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimensionless)
+GJK_FLAT_TOL = 1e-9        # tetrahedra with 6|volume| <= tol * (longest edge)^3 are flat
 
 # --- EPA ---------------------------------------------------------------------------------
 EPA_MAX_ITERS = 255        # added vertices

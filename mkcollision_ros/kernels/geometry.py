@@ -23,10 +23,10 @@ import numpy as np
 
 from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_MARGIN,
                         PLANE, SPHERE)
-from .jit import njit_kernel
+from .jit import njit_inline, njit_kernel
 
 
-@njit_kernel
+@njit_inline
 def quat_to_matrix_into(q, r):
     """Write the rotation matrix of a unit quaternion ``q`` = (x, y, z, w) into ``r``
     (3, 3) float64 (allocation-free variant of ``quat_to_matrix``)."""
@@ -64,7 +64,7 @@ def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
     return r_ab, t_ab
 
 
-@njit_kernel
+@njit_inline
 def inflation(code, prm):
     """Radius (m) by which the core of the shape is grown: its margin, plus the radius
     for spheres and capsules."""
@@ -73,7 +73,7 @@ def inflation(code, prm):
     return prm[P_MARGIN]
 
 
-@njit_kernel
+@njit_inline
 def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     """Point (x, y, z) of the shape's core farthest along the direction (dx, dy, dz),
     both in the body frame; the direction need not be unit.  Allocation-free (scalars
@@ -123,7 +123,7 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     return 0.0, 0.0, 0.0
 
 
-@njit_kernel
+@njit_inline
 def support_full_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     """Support point (x, y, z) (body frame) of the whole shape along (dx, dy, dz): core
     plus inflation.  Allocation-free variant of ``support_full``."""
@@ -173,7 +173,7 @@ def centre_core(code, prm, verts, v0, vn, out):
         out[2] /= vn
 
 
-@njit_kernel
+@njit_inline
 def shape_scale(sa, sb):
     """Length scale (m) of a pair: the sum of the bounding radii (planes count 0)."""
     s = sa[1][7] + sb[1][7]
@@ -207,7 +207,7 @@ def minkowski_support(sa, sb, verts, r_ab, t_ab, d, core, wa, wb, w):
         w[i] = wa[i] - wb[i]
 
 
-@njit_kernel
+@njit_inline
 def minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core):
     """Allocation-free ``minkowski_support``: for the direction (dx, dy, dz) in A's
     frame returns the support points of A and of B (both in A's frame) as six floats

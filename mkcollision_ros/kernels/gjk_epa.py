@@ -30,8 +30,9 @@ Phases of ``gjk_epa``
      The simplex is grown to a tetrahedron by supports normal to its affine hull (a
      flat core difference, e.g. two crossing capsule axes, gives core depth 0 with the
      flat direction as normal).  EPA: pop the face nearest the origin, add the support
-     point along its normal, remove the faces it sees (flood fill over edge neighbours
-     from that face), close the horizon with new faces; stop when the support gain <
+     point along its normal, remove the faces it sees (flood fill over the stored face
+     adjacency from that face, so a step costs the seen faces, not all faces), close the
+     horizon with new faces and link them to their neighbours; stop when the support gain <
      EPA_REL_TOL * scale.  Fixed buffers: EPA_MAX_ITERS vertices, EPA_MAX_FACES faces.
   3. If a cap is hit (valleys of equally deep directions, e.g. a sphere centred on a
      cylinder's or cone's axis), the best upper bound min h(u) over the evaluated
@@ -69,12 +70,12 @@ import numpy as np
 
 from .constants import (EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES, EPA_MAX_ITERS, EPA_REL_TOL,
                         EPA_WITNESS_SHIFT,
-                        GJK_ABS_TOL, GJK_MAX_ITERS, GJK_REL_TOL, M_GJK_EPA,
+                        GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS, GJK_REL_TOL, M_GJK_EPA,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
                         OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
                         ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import inflation, minkowski_support_xyz, shape_scale
-from .jit import njit_kernel
+from .jit import njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of pairs by the batch
 # kernel and reused pair after pair; no state survives from one pair to the next.  Three
@@ -84,9 +85,10 @@ from .jit import njit_kernel
 #      rows t3 (see below), the growth candidates, EPA vertices V, VA, VB, face normals FN
 #   fv float64 (_FV_SIZE,): barycentric weights lam / lam_prev, l3, vol, the EPA result
 #      res (10), GJK's closest point v (3), face offsets FD
-#   iv int64 (_IV_ROWS, 3): faces F, horizon edges (cols 0-1), flood-fill stack (col 0),
-#      alive flags (col 1), seen flags (col 2), then the faces that see the new point
-#      (col 0) and the seen faces (col 1) as lists
+#   iv int64 (_IV_ROWS, 3): faces F, horizon edges (a, b, face beyond), flood-fill
+#      stack (col 0), alive flags (col 1), visit tags (col 2), then the new faces (col 0)
+#      and the free face slots (col 1) as lists, then the face adjacency ADJ (the face
+#      across edge e = F[f, e] -> F[f, (e + 1) % 3])
 # t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 4-7 d, wa, wb, w of gjk_epa; 8-11
 # d, wa, wb, w of _gjk / _grow_to_tetra / _epa; 12 v_prev (_gjk) or cin (_epa); 13-14
 # ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir (_grow_to_tetra); 19-24 d, wa, wb, w, e1, e2
@@ -107,7 +109,8 @@ _IF = 0
 _IE = EPA_MAX_FACES
 _IS = _IE + 3 * EPA_MAX_FACES
 _IC = _IS + EPA_MAX_FACES
-_IV_ROWS = _IC + EPA_MAX_FACES
+_IA = _IC + EPA_MAX_FACES
+_IV_ROWS = _IA + EPA_MAX_FACES
 
 
 @njit_kernel
@@ -124,7 +127,7 @@ _GJK_OVERLAP = 1     # origin inside (or within round-off of) the simplex
 _GJK_CAP = 2         # iteration cap hit
 
 
-@njit_kernel
+@njit_inline
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
@@ -225,7 +228,7 @@ def _tri_closest(a0, a1, a2, b0, b1, b2, c0, c1, c2):
     return l0, l1, l2, x * x + y * y + z * z
 
 
-@njit_kernel
+@njit_inline
 def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
     """Closest point ``v`` (3,) to the origin of the simplex ``W[:n]`` (n in 1..4, A's
     frame).  Writes barycentric weights into ``lam`` and compacts W, WA, WB to the
@@ -252,6 +255,22 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
         # faces (i, j, k) opposite vertex m
         inside = True
         best = np.inf
+        # a flat tetrahedron (6 |volume| <= GJK_FLAT_TOL * longest edge^3) never holds
+        # the origin: its face orientations are rounding noise (a flat needle of three
+        # nearly equal support points once passed the face tests below with the origin
+        # 0.13 m off its plane; regression test test_gjk_flat_tetrahedron_not_inside)
+        lmax2 = 0.0
+        for i in range(3):
+            for j in range(i + 1, 4):
+                lmax2 = max(lmax2, (W[j, 0] - W[i, 0]) ** 2 + (W[j, 1] - W[i, 1]) ** 2
+                            + (W[j, 2] - W[i, 2]) ** 2)
+        e1x, e1y, e1z = W[1, 0] - W[0, 0], W[1, 1] - W[0, 1], W[1, 2] - W[0, 2]
+        e2x, e2y, e2z = W[2, 0] - W[0, 0], W[2, 1] - W[0, 1], W[2, 2] - W[0, 2]
+        e3x, e3y, e3z = W[3, 0] - W[0, 0], W[3, 1] - W[0, 1], W[3, 2] - W[0, 2]
+        vol6 = (e1x * (e2y * e3z - e2z * e3y) + e1y * (e2z * e3x - e2x * e3z)
+                + e1z * (e2x * e3y - e2y * e3x))
+        if not abs(vol6) > GJK_FLAT_TOL * lmax2 * math.sqrt(lmax2):
+            inside = False
         for m in range(4):
             if m == 0:
                 i, j, k = 1, 2, 3
@@ -575,7 +594,7 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
     return n
 
 
-@njit_kernel
+@njit_inline
 def _face_setup(V, F, FN, FD, f, cin):
     """Normal (outward, away from the interior point cin) and origin distance of face f.
     Returns False for a degenerate (zero-area) face."""
@@ -649,6 +668,16 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
     return ub
 
 
+@njit_inline
+def _edge_of(F, g, a, b):
+    """Index e of the edge {a, b} of face g (either direction), or -1."""
+    for e in range(3):
+        p, q = F[g, e], F[g, (e + 1) % 3]
+        if (p == a and q == b) or (p == b and q == a):
+            return e
+    return -1
+
+
 @njit_kernel
 def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
@@ -664,14 +693,13 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     F, edges = iv[_IF:_IF + EPA_MAX_FACES], iv[_IE:_IE + 3 * EPA_MAX_FACES]
     stack = iv[_IS:_IS + EPA_MAX_FACES, 0]
     alive = iv[_IS:_IS + EPA_MAX_FACES, 1]
-    vis = iv[_IS:_IS + EPA_MAX_FACES, 2]
-    cands = iv[_IC:_IC + EPA_MAX_FACES, 0]
-    vlist = iv[_IC:_IC + EPA_MAX_FACES, 1]
+    tag = iv[_IS:_IS + EPA_MAX_FACES, 2]
+    newf = iv[_IC:_IC + EPA_MAX_FACES, 0]
+    free = iv[_IC:_IC + EPA_MAX_FACES, 1]
+    ADJ = iv[_IA:_IA + EPA_MAX_FACES]
     cin = ws[0][_T3 + 12]
     for c in range(3):
         cin[c] = 0.0
-    for f in range(4):
-        vis[f] = False
     for i in range(4):
         for c in range(3):
             V[i, c] = W[i, c]
@@ -687,6 +715,19 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     for f in range(4):
         _face_setup(V, F, FN, FD, f, cin)
         alive[f] = True
+        tag[f] = 0
+    # adjacency of the tetrahedron; every edge must appear reversed in its neighbour
+    # (consistent outward orientation), else the start is degenerate and EPA cannot
+    # run on it
+    for f in range(4):
+        for e in range(3):
+            a, b = F[f, e], F[f, (e + 1) % 3]
+            for g in range(4):
+                if g != f and _edge_of(F, g, a, b) >= 0:
+                    ADJ[f, e] = g
+                    if F[g, (_edge_of(F, g, a, b) + 1) % 3] != a:
+                        return 0, False, np.inf, False
+    nfree = 0
     d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     tol = EPA_REL_TOL * scale
     vis_tol = EPA_DEGEN_TOL * scale
@@ -731,88 +772,83 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             converged = True
             break
         it += 1
-        # faces seen from w: flood fill from the best face over edge neighbours, so
-        # the removed region is connected (a disk) and the polytope stays a manifold.
-        # The fill only ever enters faces that see w, so it searches the neighbours of a
-        # face in the short list of those (one O(faces) pass), not among all faces.
-        ncand = 0
-        for g in range(nf):
-            vis[g] = False
-            if alive[g] and g != best:
-                i = F[g, 0]
-                sg = (FN[g, 0] * (w[0] - V[i, 0]) + FN[g, 1] * (w[1] - V[i, 1])
-                      + FN[g, 2] * (w[2] - V[i, 2]))
-                if sg > vis_tol:
-                    cands[ncand] = g
-                    ncand += 1
-        vis[best] = True
+        # faces seen from w: a flood fill over the face adjacency from the best face,
+        # so the removed region is connected (a disk) and the polytope stays a
+        # manifold; its work is the seen faces and their rim, not all faces.  The rim
+        # edges (a, b) of seen faces, with the unseen face g beyond, form the horizon.
+        alive[best] = False
+        FD[best] = np.inf
+        tag[best] = it
+        free[nfree] = best
+        nfree += 1
         stack[0] = best
         ns = 1
+        ne = 0
         while ns > 0:
             ns -= 1
             f = stack[ns]
             for e in range(3):
-                a = F[f, e]
-                b = F[f, (e + 1) % 3]
-                for q in range(ncand):
-                    g = cands[q]
-                    if not vis[g]:
-                        if ((F[g, 0] == b and F[g, 1] == a) or (F[g, 1] == b and F[g, 2] == a)
-                                or (F[g, 2] == b and F[g, 0] == a)):
-                            vis[g] = True
-                            stack[ns] = g
-                            ns += 1
-        # horizon: directed edges of seen faces whose reverse is not in a seen face
-        nvis = 0
-        for f in range(nf):
-            if vis[f]:
-                vlist[nvis] = f
-                nvis += 1
-        ne = 0
-        for q in range(nvis):
-            f = vlist[q]
-            for e in range(3):
-                a = F[f, e]
-                b = F[f, (e + 1) % 3]
-                shared = False
-                for q2 in range(nvis):
-                    g = vlist[q2]
-                    if g != f:
-                        for e2 in range(3):
-                            if F[g, e2] == b and F[g, (e2 + 1) % 3] == a:
-                                shared = True
-                if not shared:
-                    edges[ne, 0] = a
-                    edges[ne, 1] = b
-                    ne += 1
+                g = ADJ[f, e]
+                if not alive[g]:
+                    continue            # seen in this step (or stale): interior edge
+                if tag[g] != it:
+                    tag[g] = it
+                    i = F[g, 0]
+                    sg = (FN[g, 0] * (w[0] - V[i, 0]) + FN[g, 1] * (w[1] - V[i, 1])
+                          + FN[g, 2] * (w[2] - V[i, 2]))
+                    if sg > vis_tol:
+                        alive[g] = False
+                        FD[g] = np.inf
+                        free[nfree] = g
+                        nfree += 1
+                        stack[ns] = g
+                        ns += 1
+                        continue
+                edges[ne, 0] = F[f, e]
+                edges[ne, 1] = F[f, (e + 1) % 3]
+                edges[ne, 2] = g
+                ne += 1
         # room for the new faces?
-        free = 0
-        for f in range(nf):
-            if vis[f] or not alive[f]:
-                free += 1
-        if ne > free + (EPA_MAX_FACES - nf):
+        if ne > nfree + (EPA_MAX_FACES - nf):
             break
         for c in range(3):
             V[nv, c] = w[c]
             VA[nv, c] = wa[c]
             VB[nv, c] = wb[c]
-        for f in range(nf):
-            if vis[f]:
-                alive[f] = False
-        slot = 0
-        for e in range(ne):
-            while slot < nf and alive[slot]:
-                slot += 1
-            f = slot
-            if f >= nf:
+        # one new face (a, b, new vertex) per horizon edge, in the freed slots first
+        for q in range(ne):
+            if nfree > 0:
+                nfree -= 1
+                f = free[nfree]
+            else:
                 f = nf
                 nf += 1
-            F[f, 0] = edges[e, 0]
-            F[f, 1] = edges[e, 1]
+            F[f, 0] = edges[q, 0]
+            F[f, 1] = edges[q, 1]
             F[f, 2] = nv
             alive[f] = True
+            tag[f] = 0
             _face_setup(V, F, FN, FD, f, cin)
-            slot = f + 1
+            newf[q] = f
+        # adjacency: across the horizon edge, the old face g; across an edge (u, new
+        # vertex), the other new face holding u (matched by vertex sets, so a face
+        # that _face_setup had to flip stays consistent)
+        for q in range(ne):
+            f = newf[q]
+            for e in range(3):
+                a, b = F[f, e], F[f, (e + 1) % 3]
+                if a != nv and b != nv:
+                    g = edges[q, 2]
+                    ADJ[f, e] = g
+                    eg = _edge_of(F, g, a, b)
+                    if eg >= 0:
+                        ADJ[g, eg] = f
+                else:
+                    u = b if a == nv else a
+                    for q2 in range(ne):
+                        if q2 != q and (edges[q2, 0] == u or edges[q2, 1] == u):
+                            ADJ[f, e] = newf[q2]
+                            break
         nv += 1
     if best < 0:
         return it, False, np.inf, False

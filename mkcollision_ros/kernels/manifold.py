@@ -48,7 +48,7 @@ from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, OUT_DIS
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, P_MARGIN, P_RADIUS, PLANE,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING)
 from .geometry import inflation, quat_to_matrix_into
-from .jit import njit_kernel, njit_parallel, prange
+from .jit import borrow, keep_alive, njit_kernel, njit_parallel, prange
 
 
 MAX_FEATURE = 8          # points of a supporting feature (cylinder cap as an 8-gon)
@@ -465,6 +465,14 @@ def _workspace():
             np.zeros(3))
 
 
+@njit_kernel
+def _borrowed(ws):
+    """The workspace's arrays as owner-less views (the caller keeps ``ws`` alive)."""
+    return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]), borrow(ws[3]), borrow(ws[4]),
+            borrow(ws[5]), borrow(ws[6]), borrow(ws[7]), borrow(ws[8]), borrow(ws[9]),
+            borrow(ws[10]), borrow(ws[11]))
+
+
 @njit_parallel
 def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
                    keep_dist, cpts, cnormal, ccount):
@@ -484,10 +492,16 @@ def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out
     one scratch workspace each, every row writes only its own slots: deterministic for
     any thread count.
     """
+    # owner-less views: no atomic reference counting per row (jit.borrow)
+    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
+    pairs, rows, pos_w, quat_w, out = (borrow(pairs), borrow(rows), borrow(pos_w),
+                                       borrow(quat_w), borrow(out))
+    cpts, cnormal, ccount = borrow(cpts), borrow(cnormal), borrow(ccount)
     n_rows = rows.shape[0]
     n_chunks = (n_rows + MANIFOLD_CHUNK - 1) // MANIFOLD_CHUNK
     for ch in prange(n_chunks):
-        ws = _workspace()
+        own = _workspace()
+        ws = _borrowed(own)
         for k in range(ch * MANIFOLD_CHUNK, min(n_rows, (ch + 1) * MANIFOLD_CHUNK)):
             r = rows[k]
             if codes[pairs[r, 0]] <= ELLIPSOID or codes[pairs[r, 1]] <= ELLIPSOID:
@@ -502,6 +516,7 @@ def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out
                 continue
             _manifold_row(k, codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
                           keep_dist, cpts, cnormal, ccount, ws)
+        keep_alive(own)
 
 
 @njit_kernel

@@ -33,7 +33,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLI
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import quat_to_matrix_into, shape_scale
 from .gjk_epa import gjk_epa_ws, make_gjk_workspace
-from .jit import njit_kernel, njit_parallel, prange
+from .jit import borrow, keep_alive, njit_kernel, njit_parallel, prange
 from .mpr import mpr
 
 # subdivision level passed to ellipsoid_sampled by the dispatcher
@@ -250,13 +250,20 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, ou
     Pairs run in fixed chunks of NP_CHUNK, one scratch workspace per chunk; each pair
     writes only its own slot: deterministic for any number of threads.
     """
+    # owner-less views: no atomic reference counting on the per-pair path (jit.borrow)
+    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
+    pairs, pos_w, quat_w = borrow(pairs), borrow(pos_w), borrow(quat_w)
+    out, status = borrow(out), borrow(status)
     n_pairs = pairs.shape[0]
     n_chunks = (n_pairs + NP_CHUNK - 1) // NP_CHUNK
     for ch in prange(n_chunks):
-        ws = make_workspace()
+        own = make_workspace()
+        ws = (borrow(own[0]), borrow(own[1]),
+              (borrow(own[2][0]), borrow(own[2][1]), borrow(own[2][2])))
         for k in range(ch * NP_CHUNK, min(n_pairs, (ch + 1) * NP_CHUNK)):
             i = pairs[k, 0]
             j = pairs[k, 1]
             status[k] = collide_world_ws(codes[i], params[i], vrange[i], codes[j],
                                          params[j], vrange[j], verts, pos_w[i], quat_w[i],
                                          pos_w[j], quat_w[j], method, out[k], ws)
+        keep_alive(own)

@@ -87,3 +87,12 @@ def keep_alive(typingctx, obj):
         return context.get_dummy_value()
 
     return types.none(obj), codegen
+
+
+if numba.config.DISABLE_JIT:
+    # pure-Python runs (NUMBA_DISABLE_JIT=1, for debugging): plain objects, no owners
+    def borrow(arr):  # noqa: F811 - the interpreted stand-in of the intrinsic above
+        return arr
+
+    def keep_alive(obj):  # noqa: F811
+        return None

@@ -42,8 +42,10 @@ BODY_KEYS = {"name", "shape", "static", "group", "mask"}
 MAX_BITS = 0xFFFFFFFF
 # narrow-phase batches at least this long run on all of numba's threads, shorter ones
 # with numba.set_num_threads(1): waking a second thread costs up to milliseconds on a
-# loaded machine, ~1 us on one thread.  Same compiled kernels, so the same numbers.
-PARALLEL_MIN_ITEMS = 2048
+# loaded machine.  256 pairs are ~0.5-2 ms of work (2-10 us a pair); on the 1,000-body
+# bench scene (442 pairs) two threads took the narrow phase from 2.2 to 1.65 ms (it was
+# 2048 while a pair cost 3-4x more).  Same compiled kernels, so the same numbers.
+PARALLEL_MIN_ITEMS = 256
 # the same for the cheap phases (bounds, broad phase, manifolds: 0.02-1 us per item).
 # Measured on the shared 2-core machine (bench scenes, 10,000 bodies): two threads made
 # the bounds 15-30x SLOWER (0.2 ms on one thread, 5-7 ms on two while the other core

@@ -433,3 +433,63 @@ def _quat_wxyz(r):
     q[1 + j] = (r[j, i] + r[i, j]) / s
     q[1 + k] = (r[k, i] + r[i, k]) / s
     return q
+
+
+def test_sphere_ellipsoid_closed_form_against_gjk_epa():
+    """sphere-ellipsoid closed form (Newton on the Lagrange multiplier) against GJK/EPA and
+    the invariants, including the special points: the centre inside on the plane of the
+    shortest axis (the flat case), coincident centres, spheroids with tied shortest
+    axes, flat and needle ellipsoids; an ellipsoid with a margin is not an ellipsoid
+    and is left to GJK/EPA."""
+    from mkcollision_ros import collide
+    import oracles as O
+    rng = np.random.default_rng(79)
+    n, hits, flat_cases = 400, 0, 0
+    for k in range(n):
+        sa_d = rand_shape(rng, "sphere")
+        radii = rng.uniform(0.1, 1.5, 3)
+        if k % 5 == 1:
+            radii[rng.integers(3)] = radii[rng.integers(3)]      # ties
+        if k % 17 == 2:
+            radii = radii * np.array([1.0, 1e-2, 1.0])[rng.permutation(3)]   # flat
+        sb_d = {"type": "ellipsoid", "radii": list(radii)}
+        sa, _ = tup(sa_d)
+        sb, _ = tup(sb_d)
+        scale = sa[1][7] + sb[1][7]
+        r = O.quat_matrix(O.random_quats(rng, 1)[0]).T
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        t = u * rng.uniform(0.0, 1.5) * contact_offset(sa, sb, r, u)
+        p_b = rng.uniform(-1, 1, 3) * radii * 0.4            # a point inside B ...
+        if k % 7 == 3:
+            p_b[np.argmin(radii)] = 0.0                         # ... on the shortest-axis plane
+            t = -r @ p_b
+            flat_cases += 1
+        elif k % 31 == 4:
+            t = np.zeros(3)                                     # coincident centres
+        st, out = run(sa_d, sb_d, r, t)
+        assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
+        d = out[C.OUT_DIST]
+        nrm = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
+        pa = out[C.OUT_PA:C.OUT_PA + 3]
+        pb = out[C.OUT_PB:C.OUT_PB + 3]
+        hits += st != C.ST_SEPARATED
+        assert np.all(np.isfinite(out))
+        assert abs(np.linalg.norm(nrm) - 1.0) < 1e-12
+        np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
+        pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+        pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
+        assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
+        assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
+        h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
+        assert d == pytest.approx(-h, abs=1e-9 * scale)
+        g = collide(sa_d, pose_a, sb_d, pose_b, method="gjk_epa")
+        assert g.distance == pytest.approx(d, abs=1e-6 * scale), (k, sa_d, sb_d, t)
+        st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
+        assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+    assert 0.3 * n <= hits <= 0.8 * n and flat_cases > 40
+    # with a margin the pair goes to GJK/EPA
+    sb_m, _ = tup({"type": "ellipsoid", "radii": [1.0, 2.0, 3.0], "margin": 0.1})
+    sa, _ = tup({"type": "sphere", "radius": 0.5})
+    out = np.zeros(C.OUT_SIZE)
+    assert collide_analytic(sa, sb_m, VERTS0, np.eye(3), np.array([0, 0, 4.0]), out) == C.ST_NOT_RUN

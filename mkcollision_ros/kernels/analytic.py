@@ -1,5 +1,6 @@
 """Exact closed-form pair tests: sphere-sphere, sphere-box, sphere-capsule,
-sphere-cylinder, sphere-cone, capsule-capsule, and a half-space (plane) against any shape; plus
+sphere-cylinder, sphere-cone, sphere-ellipsoid (ellipsoid without margin), capsule-capsule,
+and a half-space (plane) against any shape; plus
 ``box_box_sat``, the separating-axis depth of two boxes whose cores overlap (used by the
 dispatcher's auto method before GJK; not part of ``collide_analytic``, since separated
 boxes need GJK for their exact distance).
@@ -32,6 +33,18 @@ distance of A is min over x in A of (n.x - d), reached at A's support point alon
 lies on the -n side, so the normal from A to B is -n (rotated into A's frame), and moving
 B by the depth along it moves the boundary plane onto A's deepest point.
 
+Sphere-ellipsoid: the sphere's centre p against the ellipsoid x_i^2 / e_i^2 = 1 (B's
+frame).  The nearest surface point is x_i = e_i^2 p_i / (e_i^2 + t) for the root t of
+F(t) = sum (e_i p_i / (e_i^2 + t))^2 - 1, which is decreasing and convex for
+t > -e_min^2: t > 0 when p is outside, -e_min^2 < t <= 0 when inside (the nearest
+boundary point of an interior point).  Written in u = t + e_min^2 (no cancellation at
+the pole), the root is found by Newton steps kept inside a bracket (bisection when a
+step leaves it); an interior p on the plane of the shortest axis whose F stays negative
+down to u = 0 has its nearest point at u = 0 with the shortest-axis coordinate from the
+surface equation (D. Eberly, "Distance from a Point to an Ellipse, an Ellipsoid, or a
+Hyperellipsoid", Geometric Tools, 2013, gives the same case analysis).  The normal
+from A to B is minus B's outward surface normal at x.
+
 Segment-segment closest points follow the classic clamped parametric solution (e.g.
 Ericson, *Real-Time Collision Detection*, 2005, sec. 5.1.9), with the parallel case
 handled by clamping an endpoint projection.
@@ -40,7 +53,8 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD,
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, M_ANALYTIC,
+                        P_MARGIN, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import inflation, shape_scale, support_full_xyz
@@ -276,6 +290,116 @@ def _sphere_cone(sa, sb, r_ab, t_ab, out):
 
 
 @njit_kernel
+def _ellipsoid_newton_f(y0, y1, y2, e0, e1, e2, g0, g1, g2, u):
+    """F(u) = sum (e_i y_i / (g_i + u))^2 - 1 and its derivative dF/du."""
+    q0, q1, q2 = e0 * y0 / (g0 + u), e1 * y1 / (g1 + u), e2 * y2 / (g2 + u)
+    f = q0 * q0 + q1 * q1 + q2 * q2 - 1.0
+    df = -2.0 * (q0 * q0 / (g0 + u) + q1 * q1 / (g1 + u) + q2 * q2 / (g2 + u))
+    return f, df
+
+
+@njit_kernel
+def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
+    """A = sphere (centre = A's origin), B = ellipsoid without margin (module docstring)."""
+    ra = inflation(sa[0], sa[1])
+    e0, e1, e2 = sb[1][0], sb[1][1], sb[1][2]
+    # sphere centre in B's frame, folded into the positive octant
+    p0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
+    p1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
+    p2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    y0, y1, y2 = abs(p0), abs(p1), abs(p2)
+    em = min(e0, min(e1, e2))
+    m = 0 if e0 == em else (1 if e1 == em else 2)
+    g0, g1, g2 = e0 * e0 - em * em, e1 * e1 - em * em, e2 * e2 - em * em
+    if m == 0:
+        g0 = 0.0
+    elif m == 1:
+        g1 = 0.0
+    else:
+        g2 = 0.0
+    # largest coordinate along the shortest axes (ties: g_i == 0)
+    ym = max(y0 if g0 == 0.0 else 0.0, max(y1 if g1 == 0.0 else 0.0, y2 if g2 == 0.0 else 0.0))
+    level = (y0 / e0) ** 2 + (y1 / e1) ** 2 + (y2 / e2) ** 2
+    outside = level > 1.0
+    u = -1.0                               # the root; -1 marks the flat interior case
+    if outside:
+        lo = em * em
+        hi = em * em + max(e0, max(e1, e2)) * math.sqrt(y0 * y0 + y1 * y1 + y2 * y2)
+    else:
+        hi = em * em
+        lo = em * ym
+        if not lo > 0.0:
+            # p on the plane of the shortest axes: F(0+) is the other axes' terms; the
+            # flat case when it is <= 0
+            f0 = -1.0
+            if g0 > 0.0:
+                f0 += (e0 * y0 / g0) ** 2
+            if g1 > 0.0:
+                f0 += (e1 * y1 / g1) ** 2
+            if g2 > 0.0:
+                f0 += (e2 * y2 / g2) ** 2
+            if f0 <= 0.0:
+                u = 0.0
+            else:
+                lo = hi
+                for _ in range(1100):
+                    lo *= 0.5
+                    f, df = _ellipsoid_newton_f(y0, y1, y2, e0, e1, e2, g0, g1, g2, lo)
+                    if f >= 0.0 or not lo > 0.0:
+                        break
+    if u != 0.0:
+        u = lo
+        for _ in range(ELL_MAX_ITERS):
+            f, df = _ellipsoid_newton_f(y0, y1, y2, e0, e1, e2, g0, g1, g2, u)
+            if f == 0.0:
+                break
+            if f > 0.0:
+                lo = u
+            else:
+                hi = u
+            un = u - f / df if df < 0.0 else 0.5 * (lo + hi)
+            if not (lo < un < hi):
+                un = 0.5 * (lo + hi)
+            if abs(un - u) <= 4e-16 * u or not lo < hi:
+                u = un
+                break
+            u = un
+    if u == 0.0:
+        # flat interior case: x_i = e_i^2 y_i / g_i off the shortest axis, which takes
+        # the rest of the surface equation
+        x0 = e0 * e0 * y0 / g0 if g0 > 0.0 else 0.0
+        x1 = e1 * e1 * y1 / g1 if g1 > 0.0 else 0.0
+        x2 = e2 * e2 * y2 / g2 if g2 > 0.0 else 0.0
+        rest = 1.0 - (x0 / e0) ** 2 - (x1 / e1) ** 2 - (x2 / e2) ** 2
+        xm = em * math.sqrt(max(rest, 0.0))
+        if m == 0:
+            x0 = xm
+        elif m == 1:
+            x1 = xm
+        else:
+            x2 = xm
+    else:
+        x0, x1, x2 = e0 * e0 * y0 / (g0 + u), e1 * e1 * y1 / (g1 + u), e2 * e2 * y2 / (g2 + u)
+    # unfold the octant (a zero coordinate keeps the + side)
+    if p0 < 0.0:
+        x0 = -x0
+    if p1 < 0.0:
+        x1 = -x1
+    if p2 < 0.0:
+        x2 = -x2
+    dx, dy, dz = x0 - p0, x1 - p1, x2 - p2
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    # outward surface normal at x (B's frame); the normal A -> B is its opposite
+    nx, ny, nz = x0 / (e0 * e0), x1 / (e1 * e1), x2 / (e2 * e2)
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    nx, ny, nz = -nx / nn, -ny / nn, -nz / nn
+    wx = r_ab[0, 0] * nx + r_ab[0, 1] * ny + r_ab[0, 2] * nz
+    wy = r_ab[1, 0] * nx + r_ab[1, 1] * ny + r_ab[1, 2] * nz
+    wz = r_ab[2, 0] * nx + r_ab[2, 1] * ny + r_ab[2, 2] * nz
+    return _finish_s(0.0, 0.0, 0.0, d if outside else -d, wx, wy, wz, ra, 0.0, out)
+
+
+@njit_kernel
 def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     """A = any non-plane shape, B = half-space n.x <= d (B's frame)."""
     nb = sb[1]
@@ -323,6 +447,8 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
         return True, _sphere_cylinder(sa, sb, r_ab, t_ab, out)
     if ca == SPHERE and cb == CONE:
         return True, _sphere_cone(sa, sb, r_ab, t_ab, out)
+    if ca == SPHERE and cb == ELLIPSOID and sb[1][P_MARGIN] == 0.0:
+        return True, _sphere_ellipsoid(sa, sb, r_ab, t_ab, out)
     if ca == SPHERE and cb == CAPSULE:
         hb = sb[1][1]
         px, py, pz = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]

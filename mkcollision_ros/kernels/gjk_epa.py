@@ -19,7 +19,8 @@ witness points ``pa`` on A and ``pb`` on B with ``pb - pa == dist * normal``.
 Phases of ``gjk_epa``
   1. GJK on the *cores* (spheres are points, capsules segments, others themselves;
      geometry.support_core).  Sub-simplex solver: Voronoi-region tests (Ericson), face
-     weights from cross products, every face of a tetrahedron tried, and a step that
+     weights from cross products, every face holding the new vertex tried (not only
+     those facing the origin), and a step that
      does not shrink |v| is undone (robust to the sliver simplices of curved shapes).
      Stop on the duality gap |v|^2 - v.w <= max(GJK_REL_TOL |v|^2, GJK_ABS_TOL scale |v|).
      When the cores are apart, subtract the inflation radii: exact for spheres,
@@ -229,6 +230,18 @@ def _tri_closest(a0, a1, a2, b0, b1, b2, c0, c1, c2):
 
 
 @njit_inline
+def _opposite_face(m):
+    """Vertex indices (i, j, k) of the tetrahedron face opposite vertex m."""
+    if m == 0:
+        return 1, 2, 3
+    if m == 1:
+        return 0, 2, 3
+    if m == 2:
+        return 0, 1, 3
+    return 0, 1, 2
+
+
+@njit_inline
 def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
     """Closest point ``v`` (3,) to the origin of the simplex ``W[:n]`` (n in 1..4, A's
     frame).  Writes barycentric weights into ``lam`` and compacts W, WA, WB to the
@@ -272,14 +285,7 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
         if not abs(vol6) > GJK_FLAT_TOL * lmax2 * math.sqrt(lmax2):
             inside = False
         for m in range(4):
-            if m == 0:
-                i, j, k = 1, 2, 3
-            elif m == 1:
-                i, j, k = 0, 2, 3
-            elif m == 2:
-                i, j, k = 0, 1, 3
-            else:
-                i, j, k = 0, 1, 2
+            i, j, k = _opposite_face(m)
             ux, uy, uz = W[j, 0] - W[i, 0], W[j, 1] - W[i, 1], W[j, 2] - W[i, 2]
             wx, wy, wz = W[k, 0] - W[i, 0], W[k, 1] - W[i, 1], W[k, 2] - W[i, 2]
             nx = uy * wz - uz * wy
@@ -289,8 +295,8 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
             s_m = (nx * (W[m, 0] - W[i, 0]) + ny * (W[m, 1] - W[i, 1])
                    + nz * (W[m, 2] - W[i, 2]))
             # the origin is inside iff it is on vertex m's side of every face; when it
-            # is not, the closest point is the best over all four faces (testing every
-            # face, not only those 'facing' the origin, is robust to sliver tetrahedra)
+            # is not, the closest point is the best over the faces holding the new vertex
+            # (testing each, not only those 'facing' the origin, is robust to slivers)
             # a sliver (relative height of m over the face < 1e-10) never counts as
             # holding the origin
             hm = math.sqrt((nx * nx + ny * ny + nz * nz)
@@ -299,15 +305,11 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
             if s_o * s_m < 0.0 or not abs(s_m) > 1e-10 * hm:
                 inside = False
         if not inside:
-            for m in range(4):
-                if m == 0:
-                    i, j, k = 1, 2, 3
-                elif m == 1:
-                    i, j, k = 0, 2, 3
-                elif m == 2:
-                    i, j, k = 0, 1, 3
-                else:
-                    i, j, k = 0, 1, 2
+            # the closest point lies on a face holding the new vertex W[3]: the face
+            # opposite it is the previous triangle, whose closest point (|v|^2 of the
+            # last step) counts as no progress in _gjk anyway
+            for m in range(3):
+                i, j, k = _opposite_face(m)
                 l0, l1, l2, dd = _tri_closest(W[i, 0], W[i, 1], W[i, 2], W[j, 0], W[j, 1],
                                               W[j, 2], W[k, 0], W[k, 1], W[k, 2])
                 if dd < best:
@@ -319,14 +321,7 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
             # barycentric weights from signed volumes
             tot = 0.0
             for m in range(4):
-                if m == 0:
-                    i, j, k = 1, 2, 3
-                elif m == 1:
-                    i, j, k = 0, 2, 3
-                elif m == 2:
-                    i, j, k = 0, 1, 3
-                else:
-                    i, j, k = 0, 1, 2
+                i, j, k = _opposite_face(m)
                 # volume of (origin, i, j, k) vs (m, i, j, k)
                 ux, uy, uz = W[j, 0] - W[i, 0], W[j, 1] - W[i, 1], W[j, 2] - W[i, 2]
                 wx, wy, wz = W[k, 0] - W[i, 0], W[k, 1] - W[i, 1], W[k, 2] - W[i, 2]

@@ -26,9 +26,9 @@ the requested method code.
 import numpy as np
 
 from .analytic import box_box_sat, classify, closed_form_ordered, collide_analytic
-from .constants import (BOX, CAPSULE, CONE, CYLINDER, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
                         M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS, OUT_METHOD,
-                        OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
+                        OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, P_MARGIN, PLANE, SPHERE,
                         ST_NOT_RUN, ST_SEPARATED, TOUCH_TOL)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import quat_to_matrix_into, shape_scale
@@ -53,15 +53,15 @@ def make_workspace():
 
 
 @njit_kernel
-def _has_closed_form(code_a, code_b):
+def _has_closed_form(code_a, code_b, prm_b):
     """True when analytic.closed_form_ordered handles the ordered pair (code_a <=
     code_b): a half-space B with any other shape, sphere with sphere, box, capsule,
-    cylinder or cone, capsule with capsule."""
+    cylinder, cone or an ellipsoid without margin, capsule with capsule."""
     if code_b == PLANE:
         return code_a != PLANE
     if code_a == SPHERE:
         return (code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
-                or code_b == CONE)
+                or code_b == CONE or (code_b == ELLIPSOID and prm_b[P_MARGIN] == 0.0))
     return code_a == CAPSULE and code_b == CAPSULE
 
 
@@ -211,7 +211,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     sb = (code_b, prm_b, vr_b[0], vr_b[1])
     row = ws[1][0]
     if ((method == M_AUTO or method == M_ANALYTIC) and code_a <= code_b
-            and _has_closed_form(code_a, code_b)):
+            and _has_closed_form(code_a, code_b, prm_b)):
         # fast path, same result as collide_pair_ws: fewer call levels (each passes
         # arrays, whose reference counts numba updates on every call)
         st = classify(closed_form_ordered(sa, sb, verts, r_ab, t_ab, row),

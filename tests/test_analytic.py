@@ -373,11 +373,43 @@ def test_sphere_inside_cylinder_nearest_face():
     assert out[C.OUT_NORMAL:C.OUT_NORMAL + 3] == pytest.approx([-1, 0, 0], abs=1e-14)
 
 
+def _check_closed_form(sa_d, sb_d, r, t):
+    """Run the closed form on A at the origin and B at (r, t), check it against GJK/EPA
+    and the invariants (witness points on the surfaces, pb - pa = distance * normal, the
+    distance certified by the support function along the normal, swapping A and B), and
+    return its status."""
+    from mkcollision_ros import collide
+    import oracles as O
+    sa, _ = tup(sa_d)
+    sb, _ = tup(sb_d)
+    scale = sa[1][7] + sb[1][7]
+    st, out = run(sa_d, sb_d, r, t)
+    assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
+    assert np.all(np.isfinite(out))
+    d = out[C.OUT_DIST]
+    nrm = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
+    pa = out[C.OUT_PA:C.OUT_PA + 3]
+    pb = out[C.OUT_PB:C.OUT_PB + 3]
+    assert abs(np.linalg.norm(nrm) - 1.0) < 1e-12
+    np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
+    # the same pair in world poses: A at the origin (identity), B at (t, r)
+    pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+    pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
+    assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
+    assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
+    h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
+    assert d == pytest.approx(-h, abs=1e-9 * scale)
+    g = collide(sa_d, pose_a, sb_d, pose_b, method="gjk_epa")
+    assert g.distance == pytest.approx(d, abs=1e-6 * scale), (sa_d, sb_d, r, t)
+    st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
+    assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+    return st
+
+
 def test_sphere_cone_closed_form_against_gjk_epa():
     """sphere-cone closed form (meridian-plane triangle) against GJK/EPA and the
     invariants: witness points on the surfaces, pb - pa = distance * normal, the depth
     certified by the support function along the normal."""
-    from mkcollision_ros import collide
     import oracles as O
     rng = np.random.default_rng(78)
     n, hits = 300, 0
@@ -394,26 +426,7 @@ def test_sphere_cone_closed_form_against_gjk_epa():
         t = u * rng.uniform(0.0, 1.5) * contact_offset(sa, sb, r, u)
         if k % 10 == 0:
             t = u * 1e-3 * scale
-        st, out = run(sa_d, sb_d, r, t)
-        assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
-        d = out[C.OUT_DIST]
-        nrm = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
-        pa = out[C.OUT_PA:C.OUT_PA + 3]
-        pb = out[C.OUT_PB:C.OUT_PB + 3]
-        hits += st != C.ST_SEPARATED
-        assert abs(np.linalg.norm(nrm) - 1.0) < 1e-12
-        np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
-        # the same pair in world poses: A at the origin (identity), B at (t, r)
-        pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
-        pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
-        assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
-        assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
-        h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
-        assert d == pytest.approx(-h, abs=1e-9 * scale)
-        g = collide(sa_d, pose_a, sb_d, pose_b, method="gjk_epa")
-        assert g.distance == pytest.approx(d, abs=1e-6 * scale)
-        st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
-        assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+        hits += _check_closed_form(sa_d, sb_d, r, t) != C.ST_SEPARATED
     assert 0.3 * n <= hits <= 0.8 * n
 
 
@@ -441,7 +454,6 @@ def test_sphere_ellipsoid_closed_form_against_gjk_epa():
     shortest axis (the flat case), coincident centres, spheroids with tied shortest
     axes, flat and needle ellipsoids; an ellipsoid with a margin is not an ellipsoid
     and is left to GJK/EPA."""
-    from mkcollision_ros import collide
     import oracles as O
     rng = np.random.default_rng(79)
     n, hits, flat_cases = 400, 0, 0
@@ -455,7 +467,6 @@ def test_sphere_ellipsoid_closed_form_against_gjk_epa():
         sb_d = {"type": "ellipsoid", "radii": list(radii)}
         sa, _ = tup(sa_d)
         sb, _ = tup(sb_d)
-        scale = sa[1][7] + sb[1][7]
         r = O.quat_matrix(O.random_quats(rng, 1)[0]).T
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
@@ -467,26 +478,7 @@ def test_sphere_ellipsoid_closed_form_against_gjk_epa():
             flat_cases += 1
         elif k % 31 == 4:
             t = np.zeros(3)                                     # coincident centres
-        st, out = run(sa_d, sb_d, r, t)
-        assert st != C.ST_NOT_RUN and out[C.OUT_METHOD] == C.M_ANALYTIC
-        d = out[C.OUT_DIST]
-        nrm = out[C.OUT_NORMAL:C.OUT_NORMAL + 3]
-        pa = out[C.OUT_PA:C.OUT_PA + 3]
-        pb = out[C.OUT_PB:C.OUT_PB + 3]
-        hits += st != C.ST_SEPARATED
-        assert np.all(np.isfinite(out))
-        assert abs(np.linalg.norm(nrm) - 1.0) < 1e-12
-        np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
-        pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
-        pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
-        assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
-        assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
-        h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
-        assert d == pytest.approx(-h, abs=1e-9 * scale)
-        g = collide(sa_d, pose_a, sb_d, pose_b, method="gjk_epa")
-        assert g.distance == pytest.approx(d, abs=1e-6 * scale), (k, sa_d, sb_d, t)
-        st_s, out_s = run(sb_d, sa_d, r.T, -r.T @ t)
-        assert st_s == st and abs(out_s[C.OUT_DIST] - d) < 1e-12 * scale
+        hits += _check_closed_form(sa_d, sb_d, r, t) != C.ST_SEPARATED
     assert 0.3 * n <= hits <= 0.8 * n and flat_cases > 40
     # with a margin the pair goes to GJK/EPA
     sb_m, _ = tup({"type": "ellipsoid", "radii": [1.0, 2.0, 3.0], "margin": 0.1})

@@ -65,7 +65,7 @@ def test_executable_with_config_file_answers_poses():
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(moving), 1))
         msg = msg_adapters.arrays_to_body_pose_array(moving, pos, quat, Time(sec=77))
         ok = h.spin_until(lambda: any(m.header.stamp.sec == 77 for m in got),
-                          timeout=240.0, step=lambda: pub.publish(msg))
+                          timeout=480.0, step=lambda: pub.publish(msg))
         assert ok, "no ContactArray from the executable:\n" + stop(proc)
         m = next(m for m in got if m.header.stamp.sec == 77)
         assert list(zip(m.body_a, m.body_b)) == [("ball_0", "ball_1")]

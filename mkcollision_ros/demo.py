@@ -58,6 +58,19 @@ def node_executable():
                         "collision_node")
 
 
+def die_with_parent():
+    """``preexec_fn`` for a child node: the kernel sends it SIGTERM when the process that
+    started it dies, even by SIGKILL, so no node is left running (Linux prctl
+    PR_SET_PDEATHSIG; elsewhere a no-op).  The child also gets its own session, so the
+    parent stops it with one killpg."""
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGTERM)          # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
 class DemoPublisher:
     """Publishes the demo motion of the bodies of a params file (an rclpy node)."""
 
@@ -118,7 +131,7 @@ def run(seconds, params_file, node_cmd=None, out=sys.stdout):
           f"--ros-args --params-file {params_file}", file=out, flush=True)
     t_start = time.monotonic()
     proc = subprocess.Popen(node_cmd + ["--ros-args", "--params-file", params_file],
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=die_with_parent)
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node("mkcollision_demo", context=context)

@@ -4,6 +4,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -14,13 +15,13 @@ from mkcollision_msgs.msg import BodyPoseArray, ContactArray
 
 import msg_adapters
 from mkcollision_ros.config import bodies_from_params, load_params_file
-from mkcollision_ros.demo import default_params_file, node_executable
+from mkcollision_ros.demo import default_params_file, die_with_parent, node_executable
 
 
 def start_node(params_file):
     return subprocess.Popen([node_executable(), "--ros-args", "--params-file", params_file],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=die_with_parent)
 
 
 def stop(proc):
@@ -99,3 +100,44 @@ def test_demo_runs_the_real_node_and_reports_contacts():
     assert int(lines["steps"]) > 0
     assert int(lines["contacts_seen"]) > 0, out.stdout
     assert int(lines["pairs_touching"]) > 0
+
+
+PARENT = r"""
+import subprocess, sys, time
+from mkcollision_ros.demo import die_with_parent, node_executable
+proc = subprocess.Popen([node_executable(), "--ros-args", "--params-file", sys.argv[1]],
+                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                        start_new_session=True, preexec_fn=die_with_parent)
+print(proc.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def _running(pid):
+    """True while pid exists and is not a zombie."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return not any(line.startswith("State:") and "Z" in line.split()[1]
+                           for line in f)
+    except FileNotFoundError:
+        return False
+
+
+def test_node_started_by_demo_dies_with_its_parent():
+    """A node started the demo's way does not outlive a parent killed outright."""
+    parent = subprocess.Popen([sys.executable, "-c", PARENT, default_params_file()],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        child = int(parent.stdout.readline())
+        time.sleep(2.0)
+        assert _running(child)
+    finally:
+        parent.kill()
+        parent.wait()
+    deadline = time.monotonic() + 120.0
+    while _running(child) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    alive = _running(child)
+    if alive:
+        os.killpg(child, signal.SIGKILL)
+    assert not alive, "the node outlived its parent"

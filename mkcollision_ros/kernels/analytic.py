@@ -146,6 +146,23 @@ def _any_perp_s(vx, vy, vz):
     return cx / cn, cy / cn, cz / cn
 
 
+@njit_inline
+def _origin_in_b(r_ab, t_ab):
+    """A's origin (the sphere centre of the sphere-* kernels) in B's frame:
+    -r_ab^T t_ab, as three floats."""
+    return (-(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2]),
+            -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2]),
+            -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2]))
+
+
+@njit_inline
+def _b_to_a(r_ab, x, y, z):
+    """A direction given in B's frame, in A's frame: r_ab (x, y, z), as three floats."""
+    return (r_ab[0, 0] * x + r_ab[0, 1] * y + r_ab[0, 2] * z,
+            r_ab[1, 0] * x + r_ab[1, 1] * y + r_ab[1, 2] * z,
+            r_ab[2, 0] * x + r_ab[2, 1] * y + r_ab[2, 2] * z)
+
+
 @njit_kernel
 def _sphere_box(sa, sb, r_ab, t_ab, out):
     """A = sphere (centre at A's origin), B = box (rounded by its margin)."""
@@ -153,9 +170,7 @@ def _sphere_box(sa, sb, r_ab, t_ab, out):
     rb = inflation(sb[0], sb[1])
     prm = sb[1]
     # sphere centre in B's frame: r_ab^T (0 - t_ab)
-    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
-    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
-    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
     h0, h1, h2 = prm[0], prm[1], prm[2]
     q0 = min(h0, max(-h0, c0))
     q1 = min(h1, max(-h1, c1))
@@ -184,9 +199,7 @@ def _sphere_box(sa, sb, r_ab, t_ab, out):
             s = 1.0 if c2 >= 0.0 else -1.0
             n2 = -s
             q2 = s * h2
-    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
-    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
-    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
     return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
 
@@ -199,9 +212,7 @@ def _sphere_cylinder(sa, sb, r_ab, t_ab, out):
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
     rr, h = sb[1][0], sb[1][1]
-    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
-    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
-    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
     rho = math.sqrt(c0 * c0 + c1 * c1)
     if rho > 0.0:
         ux, uy = c0 / rho, c1 / rho
@@ -227,9 +238,7 @@ def _sphere_cylinder(sa, sb, r_ab, t_ab, out):
         d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
         core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         n0, n1, n2 = d0 / core, d1 / core, d2 / core
-    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
-    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
-    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
     return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
 
@@ -254,9 +263,7 @@ def _sphere_cone(sa, sb, r_ab, t_ab, out):
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
     rr, h = sb[1][0], sb[1][1]
-    c0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
-    c1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
-    c2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
     rho = math.sqrt(c0 * c0 + c1 * c1)
     if rho > 0.0:
         ux, uy = c0 / rho, c1 / rho
@@ -283,9 +290,7 @@ def _sphere_cone(sa, sb, r_ab, t_ab, out):
         d0, d1, d2 = qr * ux - c0, qr * uy - c1, qz - c2
         core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         n0, n1, n2 = d0 / core, d1 / core, d2 / core
-    nx = r_ab[0, 0] * n0 + r_ab[0, 1] * n1 + r_ab[0, 2] * n2
-    ny = r_ab[1, 0] * n0 + r_ab[1, 1] * n1 + r_ab[1, 2] * n2
-    nz = r_ab[2, 0] * n0 + r_ab[2, 1] * n1 + r_ab[2, 2] * n2
+    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
     return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
 
@@ -304,9 +309,7 @@ def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
     ra = inflation(sa[0], sa[1])
     e0, e1, e2 = sb[1][0], sb[1][1], sb[1][2]
     # sphere centre in B's frame, folded into the positive octant
-    p0 = -(r_ab[0, 0] * t_ab[0] + r_ab[1, 0] * t_ab[1] + r_ab[2, 0] * t_ab[2])
-    p1 = -(r_ab[0, 1] * t_ab[0] + r_ab[1, 1] * t_ab[1] + r_ab[2, 1] * t_ab[2])
-    p2 = -(r_ab[0, 2] * t_ab[0] + r_ab[1, 2] * t_ab[1] + r_ab[2, 2] * t_ab[2])
+    p0, p1, p2 = _origin_in_b(r_ab, t_ab)
     y0, y1, y2 = abs(p0), abs(p1), abs(p2)
     em = min(e0, min(e1, e2))
     m = 0 if e0 == em else (1 if e1 == em else 2)
@@ -393,9 +396,7 @@ def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
     nx, ny, nz = x0 / (e0 * e0), x1 / (e1 * e1), x2 / (e2 * e2)
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = -nx / nn, -ny / nn, -nz / nn
-    wx = r_ab[0, 0] * nx + r_ab[0, 1] * ny + r_ab[0, 2] * nz
-    wy = r_ab[1, 0] * nx + r_ab[1, 1] * ny + r_ab[1, 2] * nz
-    wz = r_ab[2, 0] * nx + r_ab[2, 1] * ny + r_ab[2, 2] * nz
+    wx, wy, wz = _b_to_a(r_ab, nx, ny, nz)
     return _finish_s(0.0, 0.0, 0.0, d if outside else -d, wx, wy, wz, ra, 0.0, out)
 
 
@@ -405,9 +406,7 @@ def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     nb = sb[1]
     d = sb[1][3]
     # plane normal in A's frame
-    nax = r_ab[0, 0] * nb[0] + r_ab[0, 1] * nb[1] + r_ab[0, 2] * nb[2]
-    nay = r_ab[1, 0] * nb[0] + r_ab[1, 1] * nb[1] + r_ab[1, 2] * nb[2]
-    naz = r_ab[2, 0] * nb[0] + r_ab[2, 1] * nb[1] + r_ab[2, 2] * nb[2]
+    nax, nay, naz = _b_to_a(r_ab, nb[0], nb[1], nb[2])
     x0, x1, x2 = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], -nax, -nay, -naz)
     # signed distance: n.(x in B's frame) - d
     y0, y1, y2 = x0 - t_ab[0], x1 - t_ab[1], x2 - t_ab[2]

@@ -64,7 +64,7 @@ def _overlap(table, pairs, pos, quat):
     out = np.zeros((len(pairs), OUT_SIZE))
     st = np.zeros(len(pairs), np.int64)
     collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
-                  M_AUTO, out, st)
+                  M_AUTO, np.inf, out, st)
     return (st == ST_TOUCHING) | (st == ST_PENETRATING)
 
 

@@ -4,7 +4,10 @@ For every shape-type pair (canonical order, plane last) the same seeded cases
 (``common.pair_cases``: about half colliding, a fifth within 1% of touching) are run by
 
   ours     ``kernels.narrowphase.collide_batch`` on ONE numba thread, methods gjk_epa,
-           mpr and auto (closed form where one exists, else GJK/EPA); median over
+           mpr and auto (closed form where one exists, else GJK/EPA), all with exact
+           distances (cutoff inf), and "contacts" = auto with distance cutoff 0, as the
+           pipeline runs it: a pair proved apart stops there with a distance lower
+           bound (MuJoCo's collision pass likewise reports no distances); median over
            repeats of the whole batch, after a warm-up call, divided by the pair count.
            GJK/EPA and MPR do not take planes (ST_NOT_RUN): plane rows show auto only.
   mujoco   one MJCF model per shape pair: each shape on its own mocap body (poses baked
@@ -41,14 +44,15 @@ from mkcollision_ros.kernels.constants import (M_AUTO, M_GJK_EPA, M_MPR, OUT_SIZ
                                                ST_TOUCHING)
 from mkcollision_ros.kernels.narrowphase import collide_batch  # noqa: E402
 
-METHODS = (("gjk_epa", M_GJK_EPA), ("mpr", M_MPR), ("auto", M_AUTO))
+METHODS = (("gjk_epa", M_GJK_EPA, np.inf), ("mpr", M_MPR, np.inf), ("auto", M_AUTO, np.inf),
+           ("contacts", M_AUTO, 0.0))
 
 
-def run_ours(table, pairs, pos, quat, method, repeat):
+def run_ours(table, pairs, pos, quat, method, repeat, cutoff=np.inf):
     out = np.zeros((len(pairs), OUT_SIZE))
     st = np.zeros(len(pairs), np.int64)
     args = (table.codes, table.params, table.vrange, table.verts, pairs, pos, quat, method,
-            out, st)
+            cutoff, out, st)
     collide_batch(*args)
     t = timed(lambda: collide_batch(*args), repeat) / len(pairs)
     return t, st.copy(), out.copy()
@@ -146,8 +150,8 @@ def bench(n, repeat, seed):
             shapes, table, pairs, pos, quat = pair_cases(a, b, n, seed=seed + 101 * ia
                                                          + KINDS.index(b))
             ours = {}
-            for name, m in METHODS:
-                t, st, out = run_ours(table, pairs, pos, quat, m, repeat)
+            for name, m, cutoff in METHODS:
+                t, st, out = run_ours(table, pairs, pos, quat, m, repeat, cutoff)
                 if np.all(st == ST_NOT_RUN):
                     ours[name] = (None, None)
                     continue
@@ -157,6 +161,9 @@ def bench(n, repeat, seed):
                     problems.append((a, b, name, len(bad), int(bad[0])))
             st_auto = ours["auto"][1]
             hit = (st_auto == ST_TOUCHING) | (st_auto == ST_PENETRATING)
+            st_c = ours["contacts"][1]
+            if not np.array_equal((st_c == ST_TOUCHING) | (st_c == ST_PENETRATING), hit):
+                problems.append((a, b, "contacts differ from auto", 0, 0))
             t_mj, hit_mj = run_mujoco(shapes, pos, quat, n, repeat)
             t_cc, t_cd, hit_cc = run_coal(shapes, pos, quat, n, max(1, repeat // 3))
             same = {}
@@ -166,10 +173,11 @@ def bench(n, repeat, seed):
                               float(np.mean(((st == ST_TOUCHING) | (st == ST_PENETRATING))
                                             == hit)))
             t_auto = ours["auto"][0]
+            t_con = ours["contacts"][0]
             rows.append([
                 f"{a}-{b}", str(n), _pct(hit.mean()), _us(ours["gjk_epa"][0]),
-                _us(ours["mpr"][0]), _us(t_auto), _us(t_mj), _us(t_cc), _us(t_cd),
-                _ratio(t_auto, t_mj),
+                _us(ours["mpr"][0]), _us(t_auto), _us(t_con), _us(t_mj), _us(t_cc),
+                _us(t_cd), _ratio(t_auto, t_mj), _ratio(t_con, t_mj),
                 _ratio(min(x for x in (ours["gjk_epa"][0], ours["mpr"][0], t_auto)
                            if x is not None), t_mj),
                 _ratio(t_auto, t_cc),
@@ -178,8 +186,9 @@ def bench(n, repeat, seed):
                 f"{_pct(same['gjk_epa'])}/{_pct(same['mpr'])}",
             ])
             print(f"  done {a}-{b}", file=sys.stderr, flush=True)
-    head = ["pair", "n", "hit % (auto)", "gjk_epa µs", "mpr µs", "auto µs", "mujoco µs",
-            "coal collide µs", "coal distance µs", "auto/mujoco", "best/mujoco",
+    head = ["pair", "n", "hit % (auto)", "gjk_epa µs", "mpr µs", "auto µs", "contacts µs",
+            "mujoco µs", "coal collide µs", "coal distance µs", "auto/mujoco",
+            "contacts/mujoco", "best/mujoco",
             "auto/coal collide", "agree mujoco %", "agree coal %",
             "gjk/mpr agree auto %"]
     print("| " + " | ".join(head) + " |")
@@ -203,7 +212,7 @@ t1 = time.perf_counter()
 tb = build_table([{"type": "sphere", "radius": 0.5}, {"type": "box", "size": [1, 1, 1]}])
 out = np.zeros((1, 12)); st = np.zeros(1, np.int64)
 collide_batch(tb.codes, tb.params, tb.vrange, tb.verts, np.array([[0, 1]]),
-              np.array([[0, 0, 0], [0.9, 0, 0.]]), np.tile([0, 0, 0, 1.], (2, 1)), 0, out, st)
+              np.array([[0, 0, 0], [0.9, 0, 0.]]), np.tile([0, 0, 0, 1.], (2, 1)), 0, 0.0, out, st)
 t2 = time.perf_counter()
 print(f"{t1 - t0:.3f} {t2 - t0:.3f}")
 """

@@ -79,8 +79,8 @@ def warm_up():
     out = np.zeros((1, OUT_SIZE))
     status = np.zeros(1, dtype=np.int64)
     for m in range(len(METHOD_NAMES)):
-        collide_batch(codes, params, vrange, verts, pairs, pos, quat, np.int64(m), out,
-                      status)
+        collide_batch(codes, params, vrange, verts, pairs, pos, quat, np.int64(m), np.inf,
+                      out, status)
     collide(dict(type="sphere", radius=1.0), ([0, 0, 0], [0, 0, 0, 1]),
             dict(type="box", size=[1, 1, 1]), ([3, 0, 0], [0, 0, 0, 1]))
     collide(dict(type="sphere", radius=1.0), ([0, 0, 0], [0, 0, 0, 1]),

@@ -13,7 +13,9 @@ One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
                (``config.allowed_pairs``, names, MoveIt's allowed-collision idea)
   narrowphase  kernels/narrowphase.collide_batch with ``config.method``; pairs with a
                plane always use the closed form (``auto``), as GJK/EPA and MPR do not
-               take unbounded shapes
+               take unbounded shapes.  Distance cutoff 0 (contacts only): only
+               touching pairs are kept, so GJK stops as soon as a pair is proved apart
+               instead of refining a distance nobody reads
   manifold     face clipping for face-on-face contacts (kernels/manifold), else one point
   arbiters     persistent contacts with stable ids and events (arbiters.py)
 
@@ -36,6 +38,9 @@ from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
 from .kernels.narrowphase import collide_batch
 from .results import ContactSet
 from .shapes import build_table
+
+# distance cutoff of the narrow phase (m): the step keeps touching pairs only
+_CONTACTS_ONLY = 0.0
 
 PIPELINE_METHODS = ("auto", "gjk_epa", "mpr")
 BODY_KEYS = {"name", "shape", "static", "group", "mask"}
@@ -309,7 +314,7 @@ class Pipeline:
             # pairs with a plane use the closed form (auto) whatever the method
             with _threads(npairs, par):
                 collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat,
-                              M_AUTO, out, status)
+                              M_AUTO, _CONTACTS_ONLY, out, status)
         else:
             has_plane = self._is_plane[pairs[:, 0]] | self._is_plane[pairs[:, 1]]
             for sel, method in ((has_plane, M_AUTO), (~has_plane, self._method)):
@@ -320,7 +325,7 @@ class Pipeline:
                     with _threads(len(idx), par):
                         collide_batch(t.codes, t.params, t.vrange, t.verts,
                                       np.ascontiguousarray(pairs[idx]), pos, quat, method,
-                                      o, s)
+                                      _CONTACTS_ONLY, o, s)
                     out[idx] = o
                     status[idx] = s
         t4 = time.perf_counter()

@@ -27,7 +27,7 @@ def query_contacts(table: ShapeTable, names, indices, positions, orientations, s
         collide_batch(table.codes, table.params, table.vrange, table.verts, pairs,
                       np.ascontiguousarray(positions, dtype=np.float64),
                       np.ascontiguousarray(orientations, dtype=np.float64),
-                      method, out, status)
+                      method, 0.0, out, status)
     hit = (status == C.ST_TOUCHING) | (status == C.ST_PENETRATING)
     rows, pairs = out[hit], pairs[hit]
     pa, pb = rows[:, C.OUT_PA:C.OUT_PA + 3], rows[:, C.OUT_PB:C.OUT_PB + 3]

@@ -27,7 +27,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .kernels.constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID,
-                                N_PARAMS, P_MARGIN, P_RADIUS, PLANE, SHAPE_NAMES, SPHERE)
+                                N_PARAMS, P_MARGIN, P_RADIUS, P_ROLL, PLANE, SHAPE_NAMES,
+                                SPHERE)
 
 SHAPE_CODES = {name: code for code, name in enumerate(SHAPE_NAMES)}
 _KEYS = {
@@ -117,6 +118,10 @@ def shape_row(shape, base_dir=None):
     elif code == ELLIPSOID:
         prm[:3] = _vector(shape, "radii", 3)
         radius = prm[:3].max()
+        # the smallest radius of curvature of the surface, c_min^2 / a_max: a ball of
+        # this radius rolls freely inside, so the ellipsoid is a core grown by it
+        # (kernels/geometry.py), which GJK/EPA resolve in fewer steps
+        prm[P_ROLL] = prm[:3].min() ** 2 / radius
     elif code == BOX:
         prm[:3] = 0.5 * _vector(shape, "size", 3)
         radius = float(np.linalg.norm(prm[:3]))

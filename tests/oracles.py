@@ -208,7 +208,7 @@ def run_batch(shapes_a, pos_a, quat_a, shapes_b, pos_b, quat_b, method="gjk_epa"
     status = np.zeros(n, dtype=np.int64)
     collide_batch(table.codes, table.params, table.vrange,
                   np.ascontiguousarray(table.verts), pairs, pos, quat,
-                  np.int64(METHOD_NAMES.index(method)), out, status)
+                  np.int64(METHOD_NAMES.index(method)), np.inf, out, status)
     return out, status
 
 

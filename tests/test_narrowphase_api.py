@@ -158,7 +158,7 @@ def _batch(table, pos, quat, pairs, method=0):
     out = np.full((len(pairs), 12), np.nan)
     status = np.full(len(pairs), -1, dtype=np.int64)
     collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
-                  np.int64(method), out, status)
+                  np.int64(method), np.inf, out, status)
     return out, status
 
 
@@ -187,6 +187,35 @@ def test_batch_matches_single_calls_and_is_thread_count_independent():
         assert np.allclose(r.normal, out1[k, OUT_NORMAL:OUT_NORMAL + 3], atol=1e-6)
         assert np.allclose(r.point_a, out1[k, OUT_PA:OUT_PA + 3], atol=1e-6 * scale)
         assert np.allclose(r.point_b, out1[k, OUT_PB:OUT_PB + 3], atol=1e-6 * scale)
+
+
+def test_cutoff_zero_keeps_every_contact_and_bounds_the_distance_of_the_rest():
+    # the pipeline's contacts-only mode (cutoff 0): the same touching pairs with the same
+    # rows, and for pairs apart a certified lower bound with its separating direction
+    rng = np.random.default_rng(11)
+    shapes, table, pos, quat, pairs = _scene(rng, n_shapes=60, n_pairs=600)
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    early = 0
+    for method in (0, 1, 2):
+        exact, st = _batch(table, pos, quat, pairs, method)
+        cut = np.full_like(exact, np.nan)
+        st_cut = np.full_like(st, -1)
+        collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos,
+                      quat, np.int64(method), 0.0, cut, st_cut)
+        assert np.array_equal(st, st_cut) and np.all(np.isfinite(cut))
+        apart = st == Status.SEPARATED
+        assert 0.2 < apart.mean() < 0.8
+        assert np.array_equal(exact[~apart], cut[~apart])
+        for k in np.flatnonzero(apart):
+            i, j = pairs[k]
+            scale = O.bounding_radius(shapes[i]) + O.bounding_radius(shapes[j])
+            d, n = cut[k, OUT_DIST], cut[k, OUT_NORMAL:OUT_NORMAL + 3]
+            assert 0.0 < d <= exact[k, OUT_DIST] + 1e-12 * scale
+            h = O.cso_support(shapes[i], (pos[i], quat[i]), shapes[j], (pos[j], quat[j]),
+                              n[None, :])[0]
+            assert h <= -d + 1e-9 * scale   # the plane normal to n separates them by d
+            early += d < exact[k, OUT_DIST] - 1e-9 * scale
+    assert early > 50    # GJK did stop early on many pairs
 
 
 def test_batch_world_frame_witnesses():

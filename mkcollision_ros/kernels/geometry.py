@@ -5,12 +5,19 @@ pose of B expressed in A's frame, given as a rotation matrix ``r_ab`` (3, 3) and
 translation ``t_ab`` (3,), both float64, metres.  Quaternions are ``quat_xyzw``.
 
 Each shape is split into a *core* and an *inflation radius*: a sphere is a point grown by
-its radius, a capsule a segment grown by its radius, every other shape is its own core
-grown by its margin only.  GJK runs on the cores and subtracts the radii, which is exact
-and converges in a few iterations for spheres and capsules.
+its radius, a capsule a segment grown by its radius, an ellipsoid the convex body K whose
+support function is h_E(u) - r |u|, grown by r (plus its margin), and every other shape
+is its own core grown by its margin only.  GJK runs on the cores and subtracts the
+radii, which is exact and converges in a few iterations for spheres and capsules.
+
+The ellipsoid's r (params[P_ROLL]) is its smallest radius of curvature, c_min^2 / a_max:
+a ball of radius r rolls freely inside the ellipsoid, and then (and only then) h_E - r|u|
+is again a support function, of the inner parallel body K, and E = K + ball(r) exactly.
+K is less round than E (a sphere's K is a point), so GJK and EPA need fewer support
+steps to resolve it; any r between 0 and that bound gives the same answers.
 
 Shape parameter row (float64[8], see constants.N_PARAMS):
-  sphere    [r]                     ellipsoid [a, b, c] (semi-axes)
+  sphere    [r]                     ellipsoid [a, b, c, roll] (semi-axes, r above)
   box       [hx, hy, hz] (half)     capsule   [r, half_length]       (segment along z)
   cylinder  [r, half_height]        cone      [r, half_height]       (tip at +z, centred)
   convex    []  (vertices in ``verts[v0:v0+vn]``, body frame)
@@ -22,7 +29,7 @@ import math
 import numpy as np
 
 from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_MARGIN,
-                        PLANE, SPHERE)
+                        P_ROLL, PLANE, SPHERE)
 from .jit import njit_inline, njit_kernel
 
 
@@ -67,9 +74,11 @@ def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
 @njit_inline
 def inflation(code, prm):
     """Radius (m) by which the core of the shape is grown: its margin, plus the radius
-    for spheres and capsules."""
+    for spheres and capsules and the rolling radius for ellipsoids."""
     if code == SPHERE or code == CAPSULE:
         return prm[0] + prm[P_MARGIN]
+    if code == ELLIPSOID:
+        return prm[P_ROLL] + prm[P_MARGIN]
     return prm[P_MARGIN]
 
 
@@ -81,12 +90,14 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     if code == SPHERE:
         return 0.0, 0.0, 0.0
     elif code == ELLIPSOID:
-        a, b, c = prm[0], prm[1], prm[2]
+        a, b, c, r = prm[0], prm[1], prm[2], prm[P_ROLL]
         ex, ey, ez = a * a * dx, b * b * dy, c * c * dz
         n = math.sqrt(ex * dx + ey * dy + ez * dz)
         if n > 0.0:
-            return ex / n, ey / n, ez / n
-        return a, 0.0, 0.0
+            # the ellipsoid's support point less r along the unit direction
+            s = r / math.sqrt(dx * dx + dy * dy + dz * dz)
+            return ex / n - s * dx, ey / n - s * dy, ez / n - s * dz
+        return a - r, 0.0, 0.0
     elif code == BOX:
         return (prm[0] if dx >= 0.0 else -prm[0], prm[1] if dy >= 0.0 else -prm[1],
                 prm[2] if dz >= 0.0 else -prm[2])

@@ -22,9 +22,12 @@ Phases of ``gjk_epa``
      weights from cross products, every face holding the new vertex tried (not only
      those facing the origin), and a step that
      does not shrink |v| is undone (robust to the sliver simplices of curved shapes).
-     Stop on the duality gap |v|^2 - v.w <= max(GJK_REL_TOL |v|^2, GJK_ABS_TOL scale |v|).
+     Stop on the duality gap |v|^2 - v.w <= max(GJK_REL_TOL |v|^2, GJK_ABS_TOL scale |v|),
+     or, when the caller gave a distance cutoff (``gjk_epa_ws``), as soon as a support
+     plane proves the pair farther apart than the cutoff (v.w / |v| is a lower bound).
      When the cores are apart, subtract the inflation radii: exact for spheres,
-     capsules and margins even when the full shapes penetrate.
+     capsules, ellipsoids (grown from their inner parallel body, geometry.py) and
+     margins even when the full shapes penetrate.
   2. When the cores overlap (origin inside the GJK tetrahedron, or |v| <=
      EPA_DEGEN_TOL * scale), EPA on the *cores*: the full difference is the core one
      grown by a ball of radius r_a + r_b, so depth = core depth + r_a + r_b exactly.
@@ -126,6 +129,8 @@ def make_gjk_workspace():
 _GJK_APART = 0       # converged, origin outside: v is the closest point
 _GJK_OVERLAP = 1     # origin inside (or within round-off of) the simplex
 _GJK_CAP = 2         # iteration cap hit
+_GJK_BOUND = 3       # stopped early: the cores are farther apart than the caller's stop
+                     # distance (v is not the closest point; the returned bound is)
 
 
 @njit_inline
@@ -360,13 +365,16 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
 
 
 @njit_kernel
-def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
+def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop):
     """GJK loop on the cores (``core`` True) or the full shapes.
 
     Writes into the workspace ``ws``: W, WA, WB float64 (4, 3), the simplex of A - B and
     the support points of A and B (A's frame), lam (4,) barycentric weights, v (3,) the
     closest point of the simplex.
-    Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP)."""
+    ``stop`` (m, may be inf): as soon as a support plane proves the distance > stop
+    (v.w / |v| > stop), return _GJK_BOUND with that lower bound.
+    Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND,
+    the lower bound v.w / |v| for _GJK_BOUND, else 0)."""
     fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
@@ -410,7 +418,10 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
         wa[0], wa[1], wa[2] = ax_, ay_, az_
         wb[0], wb[1], wb[2] = bx_, by_, bz_
         w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
-        gap = vv - _dot(v, w)
+        vw = _dot(v, w)
+        if vw > stop * math.sqrt(vv):
+            return n, it, _GJK_BOUND, vw / math.sqrt(vv)
+        gap = vv - vw
         if gap <= GJK_REL_TOL * vv or gap <= GJK_ABS_TOL * scale * math.sqrt(vv):
             flag = _GJK_APART
             break
@@ -454,7 +465,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws):
             flag = _GJK_APART if vv > zero2 else _GJK_OVERLAP
             break
         vv = vv_new
-    return n, it, flag
+    return n, it, flag, 0.0
 
 
 @njit_kernel
@@ -604,9 +615,10 @@ def _face_setup(V, F, FN, FD, f, cin):
         FN[f, 0], FN[f, 1], FN[f, 2] = 0.0, 0.0, 0.0
         FD[f] = np.inf
         return False
-    nx /= nn
-    ny /= nn
-    nz /= nn
+    inv = 1.0 / nn        # one division, not three (a third of EPA's step was these)
+    nx *= inv
+    ny *= inv
+    nz *= inv
     if nx * (V[i, 0] - cin[0]) + ny * (V[i, 1] - cin[1]) + nz * (V[i, 2] - cin[2]) < 0.0:
         F[f, 1], F[f, 2] = k, j
         nx, ny, nz = -nx, -ny, -nz
@@ -916,7 +928,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     t2 = ws[0][_T3 + 13]
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
-    n, it, flag = _gjk(sa, sb, verts, r_ab, t2, True, scale, ws)
+    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, True, scale, ws, math.inf)
     if flag != _GJK_APART:
         return 0
     fs, fv = ws[0], ws[1]
@@ -946,12 +958,20 @@ def gjk_epa(sa, sb, verts, r_ab, t_ab, out):
     iteration cap was hit without a usable answer, ST_NOT_RUN for planes.
     Allocates its scratch buffers; batch callers use ``gjk_epa_ws``.
     """
-    return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, make_gjk_workspace())
+    return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, make_gjk_workspace(), math.inf)
 
 
 @njit_kernel
-def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
-    """``gjk_epa`` with caller-provided scratch buffers ``ws`` (make_gjk_workspace())."""
+def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
+    """``gjk_epa`` with caller-provided scratch buffers ``ws`` (make_gjk_workspace()).
+
+    ``cutoff`` (m, >= 0, may be inf): distances up to max(cutoff, the touching band)
+    are exact; a pair GJK proves farther apart than that is returned at once as
+    ST_SEPARATED with ``distance`` a certified lower bound (> cutoff), the separating
+    direction as normal and the current simplex points (moved out by the radii) as
+    witness points, which then are not the closest points.  A pipeline that wants
+    contacts only passes 0 and saves the GJK steps that would refine a distance it
+    throws away (as MuJoCo's collision pass, which reports no distances, does)."""
     nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
     _fallback_normal(t_ab, nrm)
     for c in range(3):
@@ -968,8 +988,11 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
     fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
+    ra = inflation(sa[0], sa[1])
+    rb = inflation(sb[0], sb[1])
     # phase 1: cores
-    n, it, flag = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws)
+    n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
+                              ra + rb + max(cutoff, TOUCH_TOL * scale))
     iters = it
     vn = math.sqrt(_dot(v, v))
     if flag != _GJK_OVERLAP:
@@ -979,7 +1002,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
                 pb[c] += lam[i] * WB[i, c]
         for c in range(3):
             nrm[c] = -v[c] / vn  # v = pa - pb, normal from A to B
-        if n == 3 and lam[0] > 0.0 and lam[1] > 0.0 and lam[2] > 0.0:
+        if flag == _GJK_BOUND:
+            vn = bound
+        elif n == 3 and lam[0] > 0.0 and lam[1] > 0.0 and lam[2] > 0.0:
             # v is the origin's projection onto the triangle's plane.  When the pair is
             # nearly touching |v| is tiny and its direction carries the rounding of the
             # barycentric sum; the plane's normal from the edges does not, and the
@@ -996,8 +1021,6 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
                 if off > 0.0 and cx * nrm[0] + cy * nrm[1] + cz * nrm[2] > 0.99:
                     nrm[0], nrm[1], nrm[2] = cx, cy, cz
                     vn = off
-        ra = inflation(sa[0], sa[1])
-        rb = inflation(sb[0], sb[1])
         for c in range(3):
             pa[c] += ra * nrm[c]
             pb[c] -= rb * nrm[c]
@@ -1017,8 +1040,6 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws):
         return st
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.
-    ra = inflation(sa[0], sa[1])
-    rb = inflation(sb[0], sb[1])
     if n < 4:
         n = _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, True)
         if n < 0:

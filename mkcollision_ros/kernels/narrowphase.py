@@ -23,6 +23,8 @@ Method codes (constants.M_*):
 Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
 the requested method code.
 """
+import math
+
 import numpy as np
 
 from .analytic import box_box_sat, classify, closed_form_ordered, collide_analytic
@@ -74,24 +76,25 @@ def _blank(out, method):
 
 
 @njit_kernel
-def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
-    """Run ``method`` on a pair already in canonical order; result in A's frame."""
+def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
+    """Run ``method`` on a pair already in canonical order; result in A's frame.
+    ``cutoff`` (m): see gjk_epa.gjk_epa_ws (closed forms are exact at any distance)."""
     has_plane = sa[0] == PLANE or sb[0] == PLANE
     if method == M_AUTO and sa[0] == BOX and sb[0] == BOX:
         # overlapping box cores: SAT gives the exact depth; apart: GJK's exact distance
         st = box_box_sat(sa, sb, r_ab, t_ab, out)
         if st != ST_NOT_RUN:
             return st
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
     if method == M_AUTO or method == M_ANALYTIC:
         st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
         if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
             if st == ST_NOT_RUN:
                 _blank(out, method)
             return st
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
     if method == M_GJK_EPA:
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
@@ -101,7 +104,7 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
             # touching band it cannot tell touching from apart: GJK decides, and the
             # one touching rule holds on this path too.
             iters = out[OUT_ITERS]
-            st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+            st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
             out[OUT_ITERS] += iters
             out[OUT_METHOD] = M_MPR
         return st
@@ -116,7 +119,7 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws):
         if st == ST_NOT_RUN:
             return st
         iters = out[OUT_ITERS]
-        gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2])
+        gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
         out[OUT_ITERS] += iters
         out[OUT_METHOD] = method
         return st
@@ -136,16 +139,19 @@ def collide_pair(sa, sb, verts, r_ab, t_ab, method, out):
     Returns the status code (constants.ST_*).  Allocates its scratch buffers; loops over
     many pairs use ``collide_pair_ws`` with one ``make_workspace()``.
     """
-    return collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, make_workspace())
+    return collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, make_workspace(),
+                           math.inf)
 
 
 @njit_kernel
-def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws):
+def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """``collide_pair`` with caller-provided scratch buffers ``ws`` (make_workspace());
-    ``r_ab``/``t_ab`` may be ws[0][6:9]/ws[0][9] (only r_ba, t_ba, tmp, gjk are written)."""
+    ``r_ab``/``t_ab`` may be ws[0][6:9]/ws[0][9] (only r_ba, t_ba, tmp, gjk are written).
+    ``cutoff`` (m, may be inf): farther pairs may stop at a distance lower bound
+    (gjk_epa.gjk_epa_ws)."""
     _blank(out, method)
     if sa[0] <= sb[0]:
-        st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws)
+        st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff)
         if st == ST_NOT_RUN:
             _blank(out, method)
         return st
@@ -159,7 +165,7 @@ def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws):
         t_ba[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
     tmp = ws[1][1]
     _blank(tmp, method)
-    st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp, ws)
+    st = _run_ordered(sb, sa, verts, r_ba, t_ba, method, tmp, ws, cutoff)
     if st == ST_NOT_RUN:
         _blank(out, method)
         return st
@@ -189,13 +195,14 @@ def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a
     quat_* float64 (4,) xyzw unit.  Returns the status code.  Allocates its scratch
     buffers; loops use ``collide_world_ws``."""
     return collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a,
-                            quat_a, pos_b, quat_b, method, out, make_workspace())
+                            quat_a, pos_b, quat_b, method, out, make_workspace(), math.inf)
 
 
 @njit_kernel
 def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
-                     pos_b, quat_b, method, out, ws):
-    """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())."""
+                     pos_b, quat_b, method, out, ws, cutoff):
+    """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())
+    and a distance ``cutoff`` (m, may be inf; see collide_batch)."""
     ra = ws[0][0:3]
     rb = ws[0][3:6]
     quat_to_matrix_into(quat_a, ra)
@@ -217,7 +224,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
         st = classify(closed_form_ordered(sa, sb, verts, r_ab, t_ab, row),
                       shape_scale(sa, sb))
     else:
-        st = collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, row, ws)
+        st = collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, row, ws, cutoff)
     out[OUT_DIST] = row[OUT_DIST]
     for i in range(3):
         n = 0.0
@@ -236,8 +243,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
 
 
 @njit_parallel
-def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, out,
-                  status):
+def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                  out, status):
     """Collide every pair (i, j) of ``pairs``; results in the WORLD frame.
 
     codes  int64 (N,)        shape codes          params float64 (N, 8) parameter rows
@@ -245,6 +252,13 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, ou
     pairs  int64 (P, 2)      shape indices (A, B)
     pos_w  float64 (N, 3)    positions (m)        quat_w float64 (N, 4) xyzw, unit
     method int64             method code (constants.M_*)
+    cutoff float64 (m, >= 0) distances up to max(cutoff, the touching band) are exact;
+                             np.inf: every distance exact (the API's collide/distance).
+                             A pair farther apart may be reported SEPARATED with a
+                             certified lower bound (> cutoff) as its distance, the
+                             separating direction as normal and witness points that are
+                             not the closest (gjk_epa.gjk_epa_ws); the pipeline passes 0,
+                             as it keeps touching pairs only.
     out    float64 (P, OUT_SIZE)  written: signed distance, normal A -> B, pa, pb (world)
     status int64 (P,)        written: status codes (constants.ST_*)
     Pairs run in fixed chunks of NP_CHUNK, one scratch workspace per chunk; each pair
@@ -265,5 +279,6 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, ou
             j = pairs[k, 1]
             status[k] = collide_world_ws(codes[i], params[i], vrange[i], codes[j],
                                          params[j], vrange[j], verts, pos_w[i], quat_w[i],
-                                         pos_w[j], quat_w[j], method, out[k], ws)
+                                         pos_w[j], quat_w[j], method, out[k], ws,
+                                         cutoff)
         keep_alive(own)

@@ -142,8 +142,8 @@ def test_plane_pairs():
     assert r1.normal == pytest.approx([0, 0, -1])   # from the box towards the half-space
 
 
-def _scene(rng, n_shapes=40, n_pairs=300):
-    shapes = [O.random_shape(rng, O.TYPES[i % len(O.TYPES)]) for i in range(n_shapes)]
+def _scene(rng, n_shapes=40, n_pairs=300, types=O.TYPES):
+    shapes = [O.random_shape(rng, types[i % len(types)]) for i in range(n_shapes)]
     from mkcollision_ros.shapes import build_table
     table = build_table(shapes)
     pos = rng.uniform(-1.0, 1.0, size=(n_shapes, 3))
@@ -189,33 +189,50 @@ def test_batch_matches_single_calls_and_is_thread_count_independent():
         assert np.allclose(r.point_b, out1[k, OUT_PB:OUT_PB + 3], atol=1e-6 * scale)
 
 
+def _cutoff_zero_early_stops(shapes, table, pos, quat, pairs, method):
+    """Check the contacts-only mode (cutoff 0) against exact distances: the same
+    touching pairs with the same rows, and for pairs apart a certified lower bound with
+    its separating direction.  Returns how many pairs stopped at a bound below the
+    exact distance."""
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    exact, st = _batch(table, pos, quat, pairs, method)
+    cut = np.full_like(exact, np.nan)
+    st_cut = np.full_like(st, -1)
+    collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos,
+                  quat, np.int64(method), 0.0, cut, st_cut)
+    assert np.array_equal(st, st_cut) and np.all(np.isfinite(cut))
+    apart = st == Status.SEPARATED
+    assert 0.2 < apart.mean() < 0.8
+    assert np.array_equal(exact[~apart], cut[~apart])
+    early = 0
+    for k in np.flatnonzero(apart):
+        i, j = pairs[k]
+        scale = O.bounding_radius(shapes[i]) + O.bounding_radius(shapes[j])
+        d, n = cut[k, OUT_DIST], cut[k, OUT_NORMAL:OUT_NORMAL + 3]
+        assert 0.0 < d <= exact[k, OUT_DIST] + 1e-12 * scale
+        assert abs(np.linalg.norm(n) - 1.0) < 1e-12
+        h = O.cso_support(shapes[i], (pos[i], quat[i]), shapes[j], (pos[j], quat[j]),
+                          n[None, :])[0]
+        assert h <= -d + 1e-9 * scale   # the plane normal to n separates them by d
+        early += d < exact[k, OUT_DIST] - 1e-9 * scale
+    return early
+
+
 def test_cutoff_zero_keeps_every_contact_and_bounds_the_distance_of_the_rest():
-    # the pipeline's contacts-only mode (cutoff 0): the same touching pairs with the same
-    # rows, and for pairs apart a certified lower bound with its separating direction
     rng = np.random.default_rng(11)
     shapes, table, pos, quat, pairs = _scene(rng, n_shapes=60, n_pairs=600)
-    from mkcollision_ros.kernels.narrowphase import collide_batch
-    early = 0
-    for method in (0, 1, 2):
-        exact, st = _batch(table, pos, quat, pairs, method)
-        cut = np.full_like(exact, np.nan)
-        st_cut = np.full_like(st, -1)
-        collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos,
-                      quat, np.int64(method), 0.0, cut, st_cut)
-        assert np.array_equal(st, st_cut) and np.all(np.isfinite(cut))
-        apart = st == Status.SEPARATED
-        assert 0.2 < apart.mean() < 0.8
-        assert np.array_equal(exact[~apart], cut[~apart])
-        for k in np.flatnonzero(apart):
-            i, j = pairs[k]
-            scale = O.bounding_radius(shapes[i]) + O.bounding_radius(shapes[j])
-            d, n = cut[k, OUT_DIST], cut[k, OUT_NORMAL:OUT_NORMAL + 3]
-            assert 0.0 < d <= exact[k, OUT_DIST] + 1e-12 * scale
-            h = O.cso_support(shapes[i], (pos[i], quat[i]), shapes[j], (pos[j], quat[j]),
-                              n[None, :])[0]
-            assert h <= -d + 1e-9 * scale   # the plane normal to n separates them by d
-            early += d < exact[k, OUT_DIST] - 1e-9 * scale
+    early = sum(_cutoff_zero_early_stops(shapes, table, pos, quat, pairs, method)
+                for method in (0, 1, 2))
     assert early > 50    # GJK did stop early on many pairs
+
+
+def test_cutoff_zero_box_pairs_apart_keep_the_separating_axis_bound():
+    # auto on two boxes: a separating axis of the cores ends the pair at once when its
+    # gap exceeds the cutoff (kernels/narrowphase._box_box)
+    rng = np.random.default_rng(12)
+    shapes, table, pos, quat, pairs = _scene(rng, n_shapes=40, n_pairs=800,
+                                             types=["box"])
+    assert _cutoff_zero_early_stops(shapes, table, pos, quat, pairs, 0) > 50
 
 
 def test_batch_world_frame_witnesses():

@@ -3,7 +3,8 @@ sphere-cylinder, sphere-cone, sphere-ellipsoid (ellipsoid without margin), capsu
 and a half-space (plane) against any shape; plus
 ``box_box_sat``, the separating-axis depth of two boxes whose cores overlap (used by the
 dispatcher's auto method before GJK; not part of ``collide_analytic``, since separated
-boxes need GJK for their exact distance).
+boxes need GJK for their exact distance; their SAT gap is only a lower bound, which the
+dispatcher keeps for pairs beyond its distance cutoff).
 
 All kernels here work on scalars (numba keeps them in registers): no array is allocated
 on the per-pair path.
@@ -400,7 +401,7 @@ def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
     return _finish_s(0.0, 0.0, 0.0, d if outside else -d, wx, wy, wz, ra, 0.0, out)
 
 
-@njit_kernel
+@njit_inline
 def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     """A = any non-plane shape, B = half-space n.x <= d (B's frame)."""
     nb = sb[1]
@@ -428,7 +429,7 @@ def _plane_any(sa, sb, verts, r_ab, t_ab, out):
     return dist
 
 
-@njit_kernel
+@njit_inline
 def _ordered(sa, sb, verts, r_ab, t_ab, out):
     """Closed form for code_a <= code_b; returns (ran, dist)."""
     ca, cb = sa[0], sb[0]
@@ -539,6 +540,15 @@ def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
     return _finish_s(c1x, c1y, c1z, 0.0, nx, ny, nz, ra, rb, out)
 
 
+@njit_inline
+def _sat_apart(a, gap, nx, ny, nz, ra, rb, out):
+    """box_box_sat's answer for cores separated by ``gap`` (m) along the unit axis n
+    (A -> B): the lower bound gap - ra - rb from A's support vertex along n."""
+    _finish_s(a[0] if nx >= 0.0 else -a[0], a[1] if ny >= 0.0 else -a[1],
+              a[2] if nz >= 0.0 else -a[2], gap, nx, ny, nz, ra, rb, out)
+    return ST_NOT_RUN
+
+
 @njit_kernel
 def box_box_sat(sa, sb, r_ab, t_ab, out):
     """Penetration of two boxes whose cores overlap, by the separating-axis theorem.
@@ -553,12 +563,17 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
     closest points of the two edges (edge axes), with pb - pa == dist * normal.
 
     sa, sb  box shape tuples; r_ab (3, 3), t_ab (3,) pose of B in A's frame (m)
-    out     float64[OUT_SIZE] written (A's frame) only when the cores overlap.
-    Returns the status, or ST_NOT_RUN when an axis separates the cores (then the exact
-    distance needs GJK; ``out`` is untouched).
+    out     float64[OUT_SIZE] written (A's frame).
+    Returns the status when the cores overlap (exact).  When an axis separates the
+    cores the exact distance needs GJK: it returns ST_NOT_RUN and writes a LOWER BOUND
+    instead (the cores' gap along the first separating unit axis minus the radii, that
+    axis as normal, A's support point along it as pa and pb = pa + bound * normal), which
+    the dispatcher may keep for a pair farther than its distance cutoff.
     """
     a = sa[1]
     b = sb[1]
+    ra = inflation(sa[0], a)
+    rb = inflation(sb[0], b)
     scale = shape_scale(sa, sb)
     best = np.inf
     kind = -1
@@ -569,7 +584,9 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
         rbl = b[0] * abs(r_ab[i, 0]) + b[1] * abs(r_ab[i, 1]) + b[2] * abs(r_ab[i, 2])
         ov = a[i] + rbl - abs(t_ab[i])
         if ov < 0.0:
-            return ST_NOT_RUN
+            s = 1.0 if t_ab[i] >= 0.0 else -1.0
+            return _sat_apart(a, -ov, s if i == 0 else 0.0, s if i == 1 else 0.0,
+                              s if i == 2 else 0.0, ra, rb, out)
         if ov < best:
             best = ov
             kind = 0
@@ -580,7 +597,9 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
         tl = t_ab[0] * r_ab[0, j] + t_ab[1] * r_ab[1, j] + t_ab[2] * r_ab[2, j]
         ov = ral + b[j] - abs(tl)
         if ov < 0.0:
-            return ST_NOT_RUN
+            s = 1.0 if tl >= 0.0 else -1.0
+            return _sat_apart(a, -ov, s * r_ab[0, j], s * r_ab[1, j], s * r_ab[2, j], ra,
+                              rb, out)
         if ov < best:
             best = ov
             kind = 1
@@ -607,15 +626,14 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
             tl = l0 * t_ab[0] + l1 * t_ab[1] + l2 * t_ab[2]
             ov = (ral + rbl - abs(tl)) / ln
             if ov < 0.0:
-                return ST_NOT_RUN
+                s = 1.0 / ln if tl >= 0.0 else -1.0 / ln
+                return _sat_apart(a, -ov, s * l0, s * l1, s * l2, ra, rb, out)
             if ov < best and ov < face_best - 1e-9 * scale:
                 best = ov
                 kind = 2
                 ki = i
                 kj = j
     depth = best
-    ra = inflation(sa[0], sa[1])
-    rb = inflation(sb[0], sb[1])
     if kind == 0:
         s = 1.0 if t_ab[ki] >= 0.0 else -1.0
         nx, ny, nz = 0.0, 0.0, 0.0

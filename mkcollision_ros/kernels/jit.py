@@ -17,8 +17,9 @@ calls return at once), used by the batch kernels on their arguments and scratch
 buffers; the owner must outlive the view, which ``keep_alive(owner)`` after the last use
 guarantees (numba frees a variable after its last use).  A borrowed array must never
 be returned to Python.  ``njit_inline`` (numba-IR inlining) is the policy of small
-helpers called once per support point or per pair; it makes the first compile longer
-and is kept to those helpers.
+helpers called once per support point or per pair, and of the per-pair dispatch
+inside the batch loop (narrowphase.collide_world_ws down to the closed-form switch);
+it makes the first compile longer and is kept to those.
 
 Cache location: numba's own cache notices when a kernel's file changes but not when a
 kernel it calls, in another file, changes — a stale cache would then run old code.  So

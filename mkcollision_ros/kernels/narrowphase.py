@@ -35,7 +35,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_A
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import quat_to_matrix_into, shape_scale
 from .gjk_epa import gjk_epa_ws, make_gjk_workspace
-from .jit import borrow, keep_alive, njit_kernel, njit_parallel, prange
+from .jit import borrow, keep_alive, njit_inline, njit_kernel, njit_parallel, prange
 from .mpr import mpr
 
 # subdivision level passed to ellipsoid_sampled by the dispatcher
@@ -75,17 +75,28 @@ def _blank(out, method):
     out[OUT_METHOD] = method
 
 
+@njit_inline
+def _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
+    """Two boxes, method auto: overlapping cores get SAT's exact depth; cores that an
+    axis separates by more than the cutoff (and the touching band) keep SAT's lower
+    bound, as GJK would stop there too (gjk_epa.gjk_epa_ws); the rest get GJK's exact
+    distance."""
+    st = box_box_sat(sa, sb, r_ab, t_ab, out)
+    if st != ST_NOT_RUN:
+        return st
+    if out[OUT_DIST] > max(cutoff, TOUCH_TOL * shape_scale(sa, sb)):
+        return ST_SEPARATED
+    _blank(out, M_AUTO)
+    return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
+
+
 @njit_kernel
 def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """Run ``method`` on a pair already in canonical order; result in A's frame.
     ``cutoff`` (m): see gjk_epa.gjk_epa_ws (closed forms are exact at any distance)."""
     has_plane = sa[0] == PLANE or sb[0] == PLANE
     if method == M_AUTO and sa[0] == BOX and sb[0] == BOX:
-        # overlapping box cores: SAT gives the exact depth; apart: GJK's exact distance
-        st = box_box_sat(sa, sb, r_ab, t_ab, out)
-        if st != ST_NOT_RUN:
-            return st
-        return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
+        return _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff)
     if method == M_AUTO or method == M_ANALYTIC:
         st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
         if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
@@ -198,11 +209,17 @@ def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a
                             quat_a, pos_b, quat_b, method, out, make_workspace(), math.inf)
 
 
-@njit_kernel
+@njit_inline
 def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
                      pos_b, quat_b, method, out, ws, cutoff):
     """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())
-    and a distance ``cutoff`` (m, may be inf; see collide_batch)."""
+    and a distance ``cutoff`` (m, may be inf; see collide_batch).
+
+    Inlined (with analytic.closed_form_ordered and analytic._ordered) into the batch
+    loop: a call that passes arrays costs numba a reference-count call per array even
+    on borrowed views, and those calls were half of a closed-form pair's time (measured
+    one thread, process CPU: sphere-sphere 0.19 -> 0.064 us, sphere-box 0.20 -> 0.072
+    us per pair; GJK/EPA pairs unchanged)."""
     ra = ws[0][0:3]
     rb = ws[0][3:6]
     quat_to_matrix_into(quat_a, ra)
@@ -223,6 +240,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
         # arrays, whose reference counts numba updates on every call)
         st = classify(closed_form_ordered(sa, sb, verts, r_ab, t_ab, row),
                       shape_scale(sa, sb))
+    elif method == M_AUTO and code_a == BOX and code_b == BOX:
+        st = _box_box(sa, sb, verts, r_ab, t_ab, row, ws, cutoff)
     else:
         st = collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, row, ws, cutoff)
     out[OUT_DIST] = row[OUT_DIST]

@@ -6,16 +6,18 @@
 
 One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
   bounds       world AABBs of every body from its support function (kernels/broadphase)
-  broadphase   sweep-and-prune: every pair whose AABBs (grown by proximity / 2 each)
-               overlap; planes against every body reaching their half-space
+  broadphase   a hashed uniform grid: exactly the pairs whose AABBs (grown by
+               proximity / 2 each) overlap; planes against every body reaching their
+               half-space
   filter       drop static-static pairs, pairs failing the group/mask test
                ``(group_i & mask_j) and (group_j & mask_i)``, and the allowed pairs
                (``config.allowed_pairs``, names, MoveIt's allowed-collision idea)
   narrowphase  kernels/narrowphase.collide_batch with ``config.method``; pairs with a
                plane always use the closed form (``auto``), as GJK/EPA and MPR do not
                take unbounded shapes.  Distance cutoff 0 (contacts only): only
-               touching pairs are kept, so GJK stops as soon as a pair is proved apart
-               instead of refining a distance nobody reads
+               touching pairs are kept, so a pair stops as soon as it is proved apart
+               (bounding spheres, a box-box separating axis, GJK's bound) instead of
+               refining a distance nobody reads
   manifold     face clipping for face-on-face contacts (kernels/manifold), else one point
   arbiters     persistent contacts with stable ids and events (arbiters.py)
 

@@ -142,7 +142,7 @@ def run(seconds, params_file, node_cmd=None, out=sys.stdout):
         # wait for the node's first ContactArray before the clock starts, so a first
         # numba compile does not eat into the demo time
         pub = DemoPublisher(node, params_file)
-        deadline = time.monotonic() + 600.0   # a first compile takes ~150 s, more when loaded
+        deadline = time.monotonic() + 600.0   # a first compile takes ~170 s, more when loaded
         while tally.steps == 0 and time.monotonic() < deadline and proc.poll() is None:
             executor.spin_once(timeout_sec=0.1)
         if tally.steps == 0:

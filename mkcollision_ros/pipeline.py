@@ -57,7 +57,13 @@ PARALLEL_MIN_ITEMS = 256
 # Measured on the shared 2-core machine (bench scenes, 10,000 bodies): two threads made
 # the bounds 15-30x SLOWER (0.2 ms on one thread, 5-7 ms on two while the other core
 # was busy) and the broad phase 1.5-3x slower; a parallel region only pays when the
-# second core is idle and the work is many milliseconds.
+# second core is idle and the work is many milliseconds.  Re-measured in session 3
+# (bench scenes, whole step, threshold 200,000 vs 1,000): with the other core idle, two
+# threads were 5-12% faster (1k bodies 1.47 -> 1.46 and 8.0 -> 7.0 ms; 10k 12.5 -> 11.0
+# and 80.7 -> 71.6 ms); with a busy loop on the other core, 10k bodies at density 2
+# went 128-135 -> 154 ms (broad phase 13 -> 24 ms).  A node runs beside other work, so
+# the default stays on one thread; set ``Pipeline.parallel_min_cheap_items`` lower on
+# a machine with idle cores.
 PARALLEL_MIN_CHEAP_ITEMS = 200_000
 
 

@@ -139,13 +139,13 @@ def _pct(x):
     return "n/a" if x is None else f"{100 * x:.1f}"
 
 
-def bench(n, repeat, seed):
+def bench(n, repeat, seed, only=None):
     numba.set_num_threads(1)
     rows = []
     problems = []
     for ia, a in enumerate(KINDS):
         for b in KINDS[ia:]:
-            if a == "plane" and b == "plane":
+            if (a == "plane" and b == "plane") or (only and f"{a}-{b}" not in only):
                 continue
             shapes, table, pairs, pos, quat = pair_cases(a, b, n, seed=seed + 101 * ia
                                                          + KINDS.index(b))
@@ -245,12 +245,14 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--quick", action="store_true", help="n=100, 3 repeats")
     ap.add_argument("--no-startup", action="store_true", help="skip the compile timing")
+    ap.add_argument("--pairs", nargs="*", metavar="A-B",
+                    help="only these shape pairs, e.g. box-capsule (default: all)")
     args = ap.parse_args()
     if args.quick:
         args.n, args.repeat = 100, 3
     print(f"## Narrow phase: {args.n} cases per pair, median of {args.repeat}, "
           f"numba threads = 1\n")
-    bench(args.n, args.repeat, args.seed)
+    bench(args.n, args.repeat, args.seed, args.pairs)
     if not args.no_startup:
         print()
         startup()

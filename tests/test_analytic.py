@@ -212,7 +212,8 @@ def test_unsupported_pairs_do_not_run():
 
 
 PAIRS = [("sphere", "sphere"), ("sphere", "box"), ("sphere", "capsule"),
-         ("capsule", "capsule"), ("box", "sphere"), ("capsule", "sphere")]
+         ("capsule", "capsule"), ("box", "sphere"), ("capsule", "sphere"),
+         ("box", "capsule"), ("capsule", "box")]
 
 
 @pytest.mark.parametrize("ka,kb", PAIRS)
@@ -295,6 +296,60 @@ def test_plane_against_every_shape(kind):
         np.testing.assert_allclose(r @ out_s[1:4], -nv, atol=1e-12)
         assert out_s[C.OUT_DIST] == pytest.approx(d, abs=1e-12)
     assert 0.3 * n <= hits <= 0.7 * n
+
+
+def test_box_capsule_flat_on_a_face_edge_on_and_apart():
+    box = {"type": "box", "size": [2.0, 2.0, 2.0]}
+    # lying flat on the top face, 0.1 deep: the witness is the middle of the segment's
+    # part over the face (x in [-0.2, 0.8]), not one of its ends
+    cap = {"type": "capsule", "radius": 0.2, "length": 1.0}
+    ry = np.array([[0.0, 0, 1.0], [0, 1.0, 0], [-1.0, 0, 0]])    # capsule axis along x
+    t = np.array([0.3, 0.0, 1.1])
+    st, out = run(box, cap, ry, t)
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.1, abs=1e-14)
+    np.testing.assert_allclose(out[1:4], [0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(out[C.OUT_PA:C.OUT_PA + 3], [0.3, 0.0, 1.0], atol=1e-14)
+    check_invariants(box, cap, ry, t, st, out, 3.0)
+    # axis inside the box, across the edge along y at x = z = 1: the edge axis
+    # (1, 0, 1)/sqrt(2) is the shortest way out, core depth 0.1/sqrt(2)
+    cap = {"type": "capsule", "radius": 0.1, "length": 2.0}
+    c = math.sqrt(0.5)
+    r = np.array([[-c, 0, c], [0, 1.0, 0], [-c, 0, -c]])           # axis (1, 0, -1)/sqrt(2)
+    t = np.array([0.95, 0.0, 0.95])
+    st, out = run(box, cap, r, t)
+    assert st == C.ST_PENETRATING
+    assert out[C.OUT_DIST] == pytest.approx(-0.1 / math.sqrt(2) - 0.1, abs=1e-14)
+    np.testing.assert_allclose(out[1:4], [c, 0, c], atol=1e-14)
+    np.testing.assert_allclose(out[C.OUT_PA:C.OUT_PA + 3], [1.0, 0.0, 1.0], atol=1e-14)
+    check_invariants(box, cap, r, t, st, out, 4.0)
+    # the same axis along y, just outside that edge: the cores are apart, the nearest
+    # box point is on the edge
+    rx = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])       # axis along y
+    t = np.array([1.05, 0.0, 1.05])
+    st, out = run(box, cap, rx, t)
+    assert out[C.OUT_DIST] == pytest.approx(0.05 * math.sqrt(2) - 0.1, abs=1e-14)
+    np.testing.assert_allclose(out[1:4], [c, 0, c], atol=1e-14)
+    check_invariants(box, cap, rx, t, st, out, 4.0)
+
+
+def test_box_capsule_closed_form_matches_gjk_epa_when_deep():
+    from mkcollision_ros import collide
+    from mkcollision_ros.results import Status
+    rng = np.random.default_rng(91)
+    for k in range(200):
+        box = rand_shape(rng, "box")
+        cap = rand_shape(rng, "capsule")
+        q = rng.normal(size=4)
+        pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+        # centres within a tenth of the box's size: deep, often both cores crossing
+        pose_b = (list(rng.uniform(-0.1, 0.1, 3) * np.asarray(box["size"])), list(q))
+        ra = collide(box, pose_a, cap, pose_b)
+        rg = collide(box, pose_a, cap, pose_b, method="gjk_epa")
+        assert ra.method == "analytic" and ra.status == Status.PENETRATING
+        scale = np.linalg.norm(box["size"]) + cap["radius"] + cap["length"]
+        assert ra.distance == pytest.approx(rg.distance, abs=1e-6 * scale)
+        assert np.dot(ra.normal, rg.normal) > math.cos(1e-3), (box, cap, pose_b)
 
 
 # --- sphere-cylinder (closed form added for speed; must match GJK/EPA and the exact sdf) ---

@@ -59,13 +59,14 @@ def make_workspace():
 def _has_closed_form(code_a, code_b, prm_b):
     """True when analytic.closed_form_ordered handles the ordered pair (code_a <=
     code_b): a half-space B with any other shape, sphere with sphere, box, capsule,
-    cylinder, cone or an ellipsoid without margin, capsule with capsule."""
+    cylinder, cone or an ellipsoid without margin, capsule with capsule, box with
+    capsule."""
     if code_b == PLANE:
         return code_a != PLANE
     if code_a == SPHERE:
         return (code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
                 or code_b == CONE or (code_b == ELLIPSOID and prm_b[P_MARGIN] == 0.0))
-    return code_a == CAPSULE and code_b == CAPSULE
+    return code_b == CAPSULE and (code_a == CAPSULE or code_a == BOX)
 
 
 @njit_kernel

@@ -57,6 +57,12 @@ GJK_FLAT_TOL = 1e-9        # tetrahedra with 6|volume| <= tol * (longest edge)^3
 EPA_MAX_ITERS = 255        # added vertices
 EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
 EPA_REL_TOL = 1e-8         # stop when support gain < tol * scale (dimensionless)
+EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the support gain
+                           # < tol * scale, and once more at 0.01 * tol * scale if it gave up
+EPA_POLISH_ITERS = 6       # its steps (support evaluations)
+EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
+EPA_POLISH_CAP = 0.5       # its minimum is kept only if EPA's faces deeper than it lie
+                           # within this angle of its normal (rad; gjk_epa._polish_is_global)
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

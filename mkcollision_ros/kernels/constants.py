@@ -51,6 +51,7 @@ NP_CHUNK = 128             # pairs per chunk of collide_batch (one scratch works
 # --- GJK ---------------------------------------------------------------------------------
 GJK_MAX_ITERS = 128        # iterations (support evaluations)
 GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimensionless)
+GJK_POLISH_TOL = 1e-4     # with an ellipsoid: try Newton's method once the gap < tol |v|^2
 GJK_FLAT_TOL = 1e-9        # tetrahedra with 6|volume| <= tol * (longest edge)^3 are flat
 
 # --- EPA ---------------------------------------------------------------------------------

@@ -438,6 +438,14 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
         v[c] = w[c]
     lam[0] = 1.0
     n = 1
+    if tn > 0.0:
+        # the centre line may already separate them: h_{A-B}(t/|t|) < -stop (the first
+        # support is along it; MuJoCo's GJK makes the same test before its first step)
+        ht = _dot(d, w) / tn
+        if -ht > stop:
+            for c in range(3):
+                v[c] = d[c] * (ht / tn)
+            return n, 0, _GJK_BOUND, -ht
     zero2 = (EPA_DEGEN_TOL * scale) ** 2
     vv = _dot(v, v)
     W_prev, WA_prev, WB_prev = fs[_WP:_WP + 4], fs[_WAP:_WAP + 4], fs[_WBP:_WBP + 4]

@@ -48,7 +48,11 @@ scale) and, when it reports separated, its distance a lower bound (0 <= d_mpr <=
 Bugs found in this library itself get a scene too, named ``mkc_*``, with "found here"
 and the date as source (the issue: every bug found gets its saved scene and a test
 naming it): mkc_epa_polish_wrong_basin_ellipsoid_cone (Newton's method in EPA kept a
-shallower local minimum; also missed by the first version of the oracle's search).
+shallower local minimum; also missed by the first version of the oracle's search),
+mkc_kink_newton_wrong_basin_cylinder_cylinder and
+mkc_kink_newton_close_basin_capsule_cylinder (a version along the creases of cylinders
+and capsules, not adopted, kept local minima 0.33 and 0.047 rad from the deepest
+direction).
 
 A failing scene names a bug in the library: the test is kept as is and the failure is
 reported; tolerances are not loosened to make a scene pass.

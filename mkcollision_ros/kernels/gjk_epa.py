@@ -79,8 +79,8 @@ trustworthy; scale = sum of bounding radii):
     typically 1e-9; the residual is mostly coal's (its EPA stops early, often failing
     outright at tolerances below 1e-10).  Our own bound gap is < EPA_REL_TOL * scale =
     1e-8 * scale whenever EPA converges without Newton's method (with it: a stationary
-    point of h to a 1e-9 rad step, and the cap test) (EPA_REL_TOL was 1e-10 until 2026-11-22; 1e-8
-    cuts EPA's work on smooth shapes ~2-3x and stays 100x inside the issue's 1e-6 *
+    point of h to a 1e-9 rad step, and the cap test) (EPA_REL_TOL was 1e-10 until
+    2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x inside the issue's 1e-6 *
     scale; the normal of a smooth contact is then within ~sqrt(2e-8) ~ 1.4e-4 rad of
     the exact one, its support value within 1e-8 * scale of the depth), and every
     reported depth is certified from above: distance == -h_{A-B}(normal).
@@ -94,12 +94,12 @@ import math
 
 import numpy as np
 
-from .constants import (EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES, EPA_MAX_ITERS,
-                        EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL, GJK_POLISH_TOL, EPA_REL_TOL,
-                        EPA_WITNESS_SHIFT,
-                        GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS, GJK_REL_TOL, M_GJK_EPA,
+from .constants import (BOX, CONVEX, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES,
+                        EPA_MAX_ITERS, EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP,
+                        EPA_POLISH_TOL, EPA_REL_TOL, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
+                        GJK_FLAT_TOL, GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
-                        OUT_SIZE, BOX, CONVEX, ELLIPSOID, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
+                        OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
                         ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import inflation, minkowski_support_xyz, shape_scale
 from .jit import njit_inline, njit_kernel
@@ -111,8 +111,8 @@ from .jit import njit_inline, njit_kernel
 #   fs float64 (_FS_ROWS, 3): simplex W, WA, WB and their saved copies, 3-vector scratch
 #      rows t3 (see below), the growth candidates, EPA vertices V, VA, VB and the unit
 #      direction VD whose support each vertex is (zero for the starting tetrahedron),
-#      the samples of the local polish (directions PN, difference points PW, A's points
-#      PA), face normals FN
+#      the samples of Newton's method (directions PN, support points of A - B PW),
+#      face normals FN
 #   fv float64 (_FV_SIZE,): barycentric weights lam / lam_prev, l3, vol, the EPA result
 #      res (10), GJK's closest point v (3), face offsets FD
 #   iv int64 (_IV_ROWS, 3): faces F, horizon edges (a, b, face beyond), flood-fill
@@ -123,8 +123,9 @@ from .jit import njit_inline, njit_kernel
 #      so each new face finds its neighbours across its two spokes in O(1)
 # t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 4-7 d, wa, wb, w of gjk_epa; 8-11
 # d, wa, wb, w of _gjk / _grow_to_tetra / _epa; 12 v_prev (_gjk) or cin (_epa); 13-14
-# ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir (_grow_to_tetra),
-# then d, w, wa, wb of _epa_polish's result; 19-24 d, wa, wb, w, e1, e2 (_polish_min_support).
+# ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir
+# (_grow_to_tetra), then d, w, wa, wb of _newton_min_support's result; 19-24 d, wa, wb,
+# w, e1, e2 (_polish_min_support).
 _NVMAX = EPA_MAX_ITERS + 4
 _PK = EPA_POLISH_ITERS + 4    # samples of the local polish: <= 4 given + one per step
 _W, _WA, _WB, _WP, _WAP, _WBP = 0, 4, 8, 12, 16, 20
@@ -136,8 +137,7 @@ _VB = _VA + _NVMAX
 _VD = _VB + _NVMAX
 _PN = _VD + _NVMAX
 _PW = _PN + _PK
-_PA = _PW + _PK
-_FN = _PA + _PK
+_FN = _PW + _PK
 _FS_ROWS = _FN + EPA_MAX_FACES
 _LAM, _LAMP, _L3, _VOL, _RES, _VV = 0, 4, 8, 11, 15, 25
 _FD = 28
@@ -164,8 +164,8 @@ _GJK_APART = 0       # converged, origin outside: v is the closest point
 _GJK_OVERLAP = 1     # origin inside (or within round-off of) the simplex
 _GJK_CAP = 2         # iteration cap hit
 _GJK_BOUND = 3       # stopped early: the cores are farther apart than the caller's stop
-_GJK_POLISHED = 4    # apart, minimum found by _newton_min_support (ws t3 rows 15-18)
                      # distance (v is not the closest point; the returned bound is)
+_GJK_POLISHED = 4    # apart, minimum found by _newton_min_support (ws t3 rows 15-18)
 
 
 @njit_inline
@@ -969,9 +969,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     tol = EPA_REL_TOL * scale
     polished = False
-    # only an ellipsoid's core makes h smooth and curved around whole regions of
-    # directions; on the other shapes (flat faces, rims, segment and point cores) the
-    # fit found kinks in h on 7 of 7 cylinder pairs tried: don't spend the supports
+    # Newton's method (see _smooth_pair for which pairs try it): at a gain of
+    # EPA_POLISH_TOL * scale, and once more 100x closer if it gave up
     polish_at = EPA_POLISH_TOL * scale
     tries = 2 if _smooth_pair(sa[0], sb[0]) else 0
     n_pol = 0

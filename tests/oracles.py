@@ -290,10 +290,11 @@ def signed_distance_oracle(shape_a, pose_a, shape_b, pose_b, n_start=4000, n_kee
     # of h is searched even when wider ones hold all the lowest samples (found: an
     # ellipsoid-cone pair whose deepest direction the first n_keep starts all missed)
     order = np.argsort(h)
+    rows = np.arange(len(u))
     face = np.argmax(np.abs(u), axis=1)
-    sgn = np.take_along_axis(u, face[:, None], 1)[:, 0] > 0
-    uv = np.stack([u[np.arange(len(u)), (face + 1) % 3], u[np.arange(len(u)), (face + 2) % 3]], 1)
-    uv /= np.abs(np.take_along_axis(u, face[:, None], 1))
+    major = u[rows, face]
+    uv = np.stack([u[rows, (face + 1) % 3], u[rows, (face + 2) % 3]], 1) / np.abs(major)[:, None]
+    sgn = major > 0
     cell_ij = np.clip(((uv + 1.0) * 2.0).astype(np.int64), 0, 3)
     cell = ((face * 2 + sgn) * 4 + cell_ij[:, 0]) * 4 + cell_ij[:, 1]
     seen, per_cell = set(), []

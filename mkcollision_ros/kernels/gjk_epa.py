@@ -694,6 +694,19 @@ def _face_setup(V, F, FN, FD, f, cin):
     return True
 
 
+@njit_inline
+def _tangent_basis(nx, ny, nz):
+    """Orthonormal tangent vectors (e1, e2) at the unit direction n, as six floats:
+    e1 from n's two components other than a large x, e2 = n x e1."""
+    if abs(nx) < 0.6:
+        e1x, e1y, e1z = 0.0, nz, -ny
+    else:
+        e1x, e1y, e1z = -nz, 0.0, nx
+    n1 = math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
+    e1x, e1y, e1z = e1x / n1, e1y / n1, e1z / n1
+    return (e1x, e1y, e1z, ny * e1z - nz * e1y, nz * e1x - nx * e1z, nx * e1y - ny * e1x)
+
+
 @njit_kernel
 def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws):
     """Pattern search for min over unit u of h_{A-B}(u) starting at ``ud`` (3,) with
@@ -703,17 +716,7 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
     step = 1e-2
     it = 0
     while step > 1e-10 and it < 4 * EPA_MAX_ITERS:
-        # tangent basis at ud
-        if abs(ud[0]) < 0.6:
-            e1[0], e1[1], e1[2] = 0.0, ud[2], -ud[1]
-        else:
-            e1[0], e1[1], e1[2] = -ud[2], 0.0, ud[0]
-        n1 = math.sqrt(_dot(e1, e1))
-        for c in range(3):
-            e1[c] /= n1
-        e2[0] = ud[1] * e1[2] - ud[2] * e1[1]
-        e2[1] = ud[2] * e1[0] - ud[0] * e1[2]
-        e2[2] = ud[0] * e1[1] - ud[1] * e1[0]
+        e1[0], e1[1], e1[2], e2[0], e2[1], e2[2] = _tangent_basis(ud[0], ud[1], ud[2])
         improved = False
         for m in range(8):
             ang = m * (math.pi / 4.0)
@@ -771,16 +774,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
         return 0
     h = nx * wx + ny * wy + nz * wz
     for k_it in range(EPA_POLISH_ITERS):
-        # tangent basis (e1, e2) at n
-        if abs(nx) < 0.6:
-            e1x, e1y, e1z = 0.0, nz, -ny
-        else:
-            e1x, e1y, e1z = -nz, 0.0, nx
-        inv = 1.0 / math.sqrt(e1x * e1x + e1y * e1y + e1z * e1z)
-        e1x, e1y, e1z = e1x * inv, e1y * inv, e1z * inv
-        e2x = ny * e1z - nz * e1y
-        e2y = nz * e1x - nx * e1z
-        e2z = nx * e1y - ny * e1x
+        e1x, e1y, e1z, e2x, e2y, e2z = _tangent_basis(nx, ny, nz)
         g1 = e1x * wx + e1y * wy + e1z * wz
         g2 = e2x * wx + e2y * wy + e2z * wz
         # J = C M^-1 from the samples' tangential differences (each sample normalised)

@@ -252,6 +252,25 @@ def test_stacked_boxes_and_lying_shapes():
     assert np.allclose(r.point_b - r.point_a, -r.depth[:, None] * r.normal, atol=1e-9)
 
 
+def test_coincident_coaxial_bodies_give_contacts():
+    """Bodies of revolution spawned at one pose (a ring of equally deep directions;
+    GJK/EPA hits its caps there): each pair still yields its contact, with the exact
+    depth.  Found here: such pairs were FAILED and the pipeline dropped them."""
+    bodies = [{"name": "can", "shape": {"type": "cylinder", "radius": 0.2, "height": 0.3}},
+              {"name": "peg", "shape": {"type": "cylinder", "radius": 0.1, "height": 0.6}},
+              {"name": "ball", "shape": {"type": "sphere", "radius": 0.05}}]
+    q = quat_axis([1, 2, 3], 0.4)
+    pos = np.array([[1.0, 2.0, 3.0]] * 3)
+    r = Pipeline(bodies).step(pos, np.array([q] * 3), 0.0)
+    assert sorted(map(tuple, r.pairs)) == [(0, 1), (0, 2), (1, 2)]
+    expect = {(0, 1): 0.3, (0, 2): 0.2, (1, 2): 0.15}   # min(r_a + r_b, (h_a + h_b) / 2)
+    for (a, b), d in expect.items():
+        sel = (r.body_a == a) & (r.body_b == b)
+        assert sel.any()
+        assert np.allclose(r.depth[sel], d, atol=1e-9), (a, b, r.depth[sel])
+        assert np.all(np.isfinite(r.normal[sel]))
+
+
 # ---------------------------------------------------------------- events
 def test_events_two_spheres_approach_touch_separate():
     p = Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 0.5}},

@@ -60,9 +60,12 @@ Phases of ``gjk_epa``
      2.6 -> 1.6 us; against a run at EPA_REL_TOL 1e-11 on 1500 pairs per type, normals
      within 3.8e-4 rad and distances within 1e-8 * scale, as before.
   3. If a cap is hit (valleys of equally deep directions, e.g. a sphere centred on a
-     cylinder's or cone's axis), the best upper bound min h(u) over the evaluated
-     normals is polished by a pattern search over directions and reported; the status
-     is ST_FAILED only if the gap to the EPA lower bound exceeds EPA_FAIL_GAP * scale.
+     cylinder's or cone's axis, two coaxial cylinders), the best upper bound min h(u)
+     over the evaluated normals is polished by a pattern search over directions and
+     reported; the status is ST_FAILED only if the gap to the EPA lower bound exceeds
+     EPA_FAIL_GAP * scale and that lower bound does not by itself prove penetration (a
+     pair certainly in contact always yields its contact, e.g. to the pipeline, which
+     drops failed pairs).
   Witness points: barycentric coordinates of the closest point on the final simplex /
   EPA face, applied to the support points of A and B, then moved out by the radii.
   When the origin's projection falls outside the final EPA face (sliver faces of flat
@@ -1171,6 +1174,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             res[1 + c] = ud[c]
             res[4 + c] = uwa[c]
             res[7 + c] = uwa[c] - ub * ud[c]
+        clean = False       # B's point above need not lie on B: the caller redoes both
     return it + n_pol, converged, ub - lb, clean
 
 
@@ -1339,12 +1343,22 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         res[c] = 0.0
     it, conv, gap, clean = _epa(sa, sb, verts, r_ab, t_ab, scale, ws, True)
     iters += it
-    if conv and not clean:
+    if not clean and math.isfinite(res[0]):
+        # witnesses off the best face, or the caps' pattern-searched bound (its support
+        # points need not face each other: two coaxial cylinders of unequal heights)
         iters += _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res)
     for c in range(3):
         pa[c] = res[4 + c] + ra * res[1 + c]
         pb[c] = res[7 + c] - rb * res[1 + c]
     st = _set_out(out, -res[0] - ra - rb, res[1], res[2], res[3], pa, pb, iters, scale)
-    if not conv and not gap <= EPA_FAIL_GAP * scale:
+    # caps hit with a wide gap: still a contact when EPA's lower bound on the depth
+    # (res[0] - gap, certified: the polytope lies inside A - B) alone proves
+    # penetration; the depth reported is then the pattern-searched upper bound.  In the
+    # valleys that hit the caps (coaxial bodies of revolution: a ring of equally deep
+    # directions the polytope cannot enclose to tolerance) that bound is the exact
+    # depth (tests/test_gjk_epa.py::test_coaxial_valleys_are_penetrating).  FAILED only
+    # when the pair may not touch at all.
+    if (not conv and not gap <= EPA_FAIL_GAP * scale
+            and not res[0] - gap + ra + rb > TOUCH_TOL * scale):
         st = ST_FAILED
     return st

@@ -46,7 +46,7 @@ METHOD_NAMES = ("auto", "gjk_epa", "mpr", "analytic", "ellipsoid_exact", "ellips
 TOUCH_TOL = 1e-9
 
 # --- batch kernel ------------------------------------------------------------------------
-NP_CHUNK = 128             # pairs per chunk of collide_batch (one scratch workspace each)
+NP_CHUNK = 128             # fewest pairs per block of collide_batch (jit.n_blocks)
 
 # --- GJK ---------------------------------------------------------------------------------
 GJK_MAX_ITERS = 128        # iterations (support evaluations)

@@ -58,6 +58,21 @@ njit_inline = numba.njit(cache=True, fastmath=False, nogil=True, error_model="nu
 prange = numba.prange
 
 
+def n_blocks(n_items, min_block):
+    """How many blocks a parallel batch kernel should split ``n_items`` into (plain
+    Python, for the kernel's caller: numba cannot cache a kernel that asks for the
+    thread count itself): one per thread (numba's static schedule gives each thread
+    one), fewer when blocks would hold less than ``min_block`` items, at least 1."""
+    nb = min(numba.get_num_threads(), (n_items + min_block - 1) // min_block)
+    return max(nb, 1)
+
+
+@njit_inline
+def block_bounds(n_items, nb, b):
+    """Items [lo, hi) of block ``b`` of ``nb`` (contiguous, sizes differing by <= 1)."""
+    return b * n_items // nb, (b + 1) * n_items // nb
+
+
 @intrinsic
 def borrow(typingctx, arr):
     """The same array without an owner (null meminfo and parent): numba then skips the

@@ -48,7 +48,8 @@ from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, OUT_DIS
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, P_MARGIN, P_RADIUS, PLANE,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING)
 from .geometry import inflation, quat_to_matrix_into
-from .jit import borrow, keep_alive, njit_kernel, njit_parallel, prange
+from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_kernel, njit_parallel,
+                  prange)
 
 
 MAX_FEATURE = 8          # points of a supporting feature (cylinder cap as an 8-gon)
@@ -57,7 +58,7 @@ CAP_SIDES = 8            # polygon approximating a cylinder / cone cap
 FACE_SIN = 0.05          # sin of the angle (~2.9 deg) within which a cap / side is a face
 FACE_SLACK = 0.05        # convex hull face tolerance, relative to the hull's diameter
 REF_COS = 0.9            # the reference face normal must be within ~26 deg of n
-MANIFOLD_CHUNK = 32      # rows of manifold_batch sharing one scratch workspace
+MANIFOLD_CHUNK = 32      # fewest rows of manifold_batch per block (jit.n_blocks)
 
 
 @njit_kernel
@@ -473,7 +474,46 @@ def _borrowed(ws):
             borrow(ws[10]), borrow(ws[11]))
 
 
+@njit_kernel
+def _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                    keep_dist, cpts, cnormal, ccount, lo, hi):
+    """Rows [lo, hi) of ``manifold_batch`` with one scratch workspace, in a plain loop
+    (faster than a loop inside numba's parallel region; see narrowphase._collide_block)."""
+    # owner-less views: no atomic reference counting per row (jit.borrow)
+    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
+    pairs, rows, pos_w, quat_w, out = (borrow(pairs), borrow(rows), borrow(pos_w),
+                                       borrow(quat_w), borrow(out))
+    cpts, cnormal, ccount = borrow(cpts), borrow(cnormal), borrow(ccount)
+    own = _workspace()
+    ws = _borrowed(own)
+    for k in range(lo, hi):
+        r = rows[k]
+        if codes[pairs[r, 0]] <= ELLIPSOID or codes[pairs[r, 1]] <= ELLIPSOID:
+            # a sphere or an ellipsoid presents one point: the narrow phase's (inline,
+            # as a call with array arguments costs more than the copy)
+            for i in range(3):
+                cpts[k, 0, i] = out[r, OUT_PA + i]
+                cpts[k, 0, 3 + i] = out[r, OUT_PB + i]
+                cnormal[k, i] = out[r, OUT_NORMAL + i]
+            cpts[k, 0, 6] = out[r, OUT_DIST]
+            ccount[k] = 1
+            continue
+        _manifold_row(k, codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                      keep_dist, cpts, cnormal, ccount, ws)
+    keep_alive(own)
+
+
 @njit_parallel
+def _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                    keep_dist, cpts, cnormal, ccount, nb):
+    """``manifold_batch`` in ``nb`` blocks."""
+    n_rows = rows.shape[0]
+    for blk in prange(nb):
+        lo, hi = block_bounds(n_rows, nb, blk)
+        _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                        keep_dist, cpts, cnormal, ccount, lo, hi)
+
+
 def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
                    keep_dist, cpts, cnormal, ccount):
     """Contact manifolds of the touching pairs ``pairs[rows]``.
@@ -488,35 +528,13 @@ def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out
     cpts float64 (>= T, MAX_MANIFOLD, 7) out: world point_a (3), point_b (3), distance.
     cnormal float64 (>= T, 3) out: unit normal A -> B, world.
     ccount int64 (>= T,) out: contacts of the pair (>= 1).
-    Row k of the outputs is pair ``rows[k]``; rows run in chunks of MANIFOLD_CHUNK with
-    one scratch workspace each, every row writes only its own slots: deterministic for
-    any thread count.
+    Row k of the outputs is pair ``rows[k]``; rows run in contiguous blocks, one per
+    thread (none smaller than MANIFOLD_CHUNK), with one scratch workspace each; every row
+    writes only its own slots: deterministic for any thread count.  A Python function
+    around the parallel kernel ``_manifold_batch`` (see narrowphase.collide_batch).
     """
-    # owner-less views: no atomic reference counting per row (jit.borrow)
-    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
-    pairs, rows, pos_w, quat_w, out = (borrow(pairs), borrow(rows), borrow(pos_w),
-                                       borrow(quat_w), borrow(out))
-    cpts, cnormal, ccount = borrow(cpts), borrow(cnormal), borrow(ccount)
-    n_rows = rows.shape[0]
-    n_chunks = (n_rows + MANIFOLD_CHUNK - 1) // MANIFOLD_CHUNK
-    for ch in prange(n_chunks):
-        own = _workspace()
-        ws = _borrowed(own)
-        for k in range(ch * MANIFOLD_CHUNK, min(n_rows, (ch + 1) * MANIFOLD_CHUNK)):
-            r = rows[k]
-            if codes[pairs[r, 0]] <= ELLIPSOID or codes[pairs[r, 1]] <= ELLIPSOID:
-                # a sphere or an ellipsoid presents one point: the narrow phase's (inline,
-                # as a call with array arguments costs more than the copy)
-                for i in range(3):
-                    cpts[k, 0, i] = out[r, OUT_PA + i]
-                    cpts[k, 0, 3 + i] = out[r, OUT_PB + i]
-                    cnormal[k, i] = out[r, OUT_NORMAL + i]
-                cpts[k, 0, 6] = out[r, OUT_DIST]
-                ccount[k] = 1
-                continue
-            _manifold_row(k, codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                          keep_dist, cpts, cnormal, ccount, ws)
-        keep_alive(own)
+    _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                    keep_dist, cpts, cnormal, ccount, n_blocks(rows.shape[0], MANIFOLD_CHUNK))
 
 
 @njit_kernel

@@ -3,8 +3,8 @@
 ``collide_pair`` puts a pair in the canonical order (code_a <= code_b, so a plane is
 always B), calls the method's kernel in A's frame, and maps the answer back when it had
 to swap: the normal flips, the witness points exchange and return to A's frame.
-``collide_batch`` splits the pairs into fixed contiguous chunks of NP_CHUNK pairs and runs
-the chunks with ``prange``; each chunk allocates one set of scratch buffers
+``collide_batch`` splits the pairs into contiguous blocks, one per thread (jit.n_blocks), and
+runs them with ``prange``; each block allocates one set of scratch buffers
 (``make_workspace``: poses, a result row, the GJK/EPA buffers) and reuses it pair after
 pair, so the per-pair path allocates nothing.  Each pair writes only its own row of
 ``out`` / ``status`` and no state survives between pairs, so the result does not depend
@@ -36,7 +36,8 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_A
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import quat_to_matrix_into, shape_scale
 from .gjk_epa import gjk_epa_ws, make_gjk_workspace
-from .jit import borrow, keep_alive, njit_inline, njit_kernel, njit_parallel, prange
+from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_inline, njit_kernel,
+                  njit_parallel, prange)
 from .mpr import mpr
 
 # subdivision level passed to ellipsoid_sampled by the dispatcher
@@ -280,7 +281,41 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     return st
 
 
+@njit_kernel
+def _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                   out, status, lo, hi):
+    """Pairs [lo, hi) of ``collide_batch`` with one scratch workspace, in a plain loop:
+    the same loop inside numba's parallel region (the outlined prange body) ran a
+    closed-form pair at twice the cost.  Measured one thread, 5,000 sphere-sphere pairs:
+    0.042 us per pair with the loop in the prange body and a workspace per 128 pairs,
+    0.036 with one workspace, 0.019 with the loop here."""
+    # owner-less views: no atomic reference counting on the per-pair path (jit.borrow)
+    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
+    pairs, pos_w, quat_w = borrow(pairs), borrow(pos_w), borrow(quat_w)
+    out, status = borrow(out), borrow(status)
+    own = make_workspace()
+    ws = (borrow(own[0]), borrow(own[1]),
+          (borrow(own[2][0]), borrow(own[2][1]), borrow(own[2][2])))
+    for k in range(lo, hi):
+        i = pairs[k, 0]
+        j = pairs[k, 1]
+        status[k] = collide_world_ws(codes[i], params[i], vrange[i], codes[j], params[j],
+                                     vrange[j], verts, pos_w[i], quat_w[i], pos_w[j],
+                                     quat_w[j], method, out[k], ws, cutoff)
+    keep_alive(own)
+
+
 @njit_parallel
+def _collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                   out, status, nb):
+    """``collide_batch`` in ``nb`` blocks."""
+    n_pairs = pairs.shape[0]
+    for blk in prange(nb):
+        lo, hi = block_bounds(n_pairs, nb, blk)
+        _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                       out, status, lo, hi)
+
+
 def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
                   out, status):
     """Collide every pair (i, j) of ``pairs``; results in the WORLD frame.
@@ -299,24 +334,11 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cu
                              as it keeps touching pairs only.
     out    float64 (P, OUT_SIZE)  written: signed distance, normal A -> B, pa, pb (world)
     status int64 (P,)        written: status codes (constants.ST_*)
-    Pairs run in fixed chunks of NP_CHUNK, one scratch workspace per chunk; each pair
-    writes only its own slot: deterministic for any number of threads.
+    Pairs run in contiguous blocks, one per numba thread (none smaller than NP_CHUNK),
+    one scratch workspace per block (_collide_block); each pair writes only its own slot
+    and no state survives from pair to pair: deterministic for any number of threads.
+    A Python function around the parallel kernel ``_collide_batch``, which is given the
+    block count (a kernel asking numba for its thread count cannot be cached).
     """
-    # owner-less views: no atomic reference counting on the per-pair path (jit.borrow)
-    codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
-    pairs, pos_w, quat_w = borrow(pairs), borrow(pos_w), borrow(quat_w)
-    out, status = borrow(out), borrow(status)
-    n_pairs = pairs.shape[0]
-    n_chunks = (n_pairs + NP_CHUNK - 1) // NP_CHUNK
-    for ch in prange(n_chunks):
-        own = make_workspace()
-        ws = (borrow(own[0]), borrow(own[1]),
-              (borrow(own[2][0]), borrow(own[2][1]), borrow(own[2][2])))
-        for k in range(ch * NP_CHUNK, min(n_pairs, (ch + 1) * NP_CHUNK)):
-            i = pairs[k, 0]
-            j = pairs[k, 1]
-            status[k] = collide_world_ws(codes[i], params[i], vrange[i], codes[j],
-                                         params[j], vrange[j], verts, pos_w[i], quat_w[i],
-                                         pos_w[j], quat_w[j], method, out[k], ws,
-                                         cutoff)
-        keep_alive(own)
+    _collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                   out, status, n_blocks(pairs.shape[0], NP_CHUNK))

@@ -698,6 +698,15 @@ def _face_setup(V, F, FN, FD, f, cin):
 
 
 @njit_inline
+def _meet(a, b, sn):
+    """One coordinate of a pair of witness points a (on A), b (on B) moved by halves of
+    the remainder so that b - a == sn exactly, sn being that coordinate of the signed
+    distance times the normal (-depth * n when penetrating).  Returns (a, b)."""
+    corr = 0.5 * ((b - a) - sn)
+    return a + corr, b - corr
+
+
+@njit_inline
 def _tangent_basis(nx, ny, nz):
     """Orthonormal tangent vectors (e1, e2) at the unit direction n, as six floats:
     e1 from n's two components other than a large x, e2 = n x e1."""
@@ -1121,9 +1130,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         res[0] = dep
         for c in range(3):
             res[1 + c] = d[c]
-            corr = 0.5 * ((wb[c] - wa[c]) + dep * d[c])
-            res[4 + c] = wa[c] + corr
-            res[7 + c] = wb[c] - corr
+            res[4 + c], res[7 + c] = _meet(wa[c], wb[c], -(dep * d[c]))
         return it + n_pol, True, dep - lb, True
     # witness: projection of the origin on the best face, in barycentric coordinates
     i, j, k = F[best, 0], F[best, 1], F[best, 2]
@@ -1164,9 +1171,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     # enforce pb - pa == -dep * n (exact already unless the clamped point was used),
     # splitting any correction between the two points
     for c in range(3):
-        corr = 0.5 * ((res[7 + c] - res[4 + c]) + dep * FN[best, c])
-        res[4 + c] += corr
-        res[7 + c] -= corr
+        res[4 + c], res[7 + c] = _meet(res[4 + c], res[7 + c], -(dep * FN[best, c]))
     if not converged and ub < np.inf:
         # caps hit (a valley of equally deep directions, e.g. a point on a cone's axis):
         # polish the upper bound h(ud) by a pattern search over directions, report it
@@ -1206,9 +1211,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
             pa += fv[_LAM + i] * fs[_WA + i, c]
             pb += fv[_LAM + i] * fs[_WB + i, c]
         pb -= sh * res[1 + c]
-        corr = 0.5 * ((pb - pa) + dep * res[1 + c])
-        res[4 + c] = pa + corr
-        res[7 + c] = pb - corr
+        res[4 + c], res[7 + c] = _meet(pa, pb, -(dep * res[1 + c]))
     return it
 
 
@@ -1269,9 +1272,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         dist = -_dot(pd, pw)
         for c in range(3):
             nrm[c] = pd[c]
-            corr = 0.5 * ((pwb[c] - pwa[c]) - dist * pd[c])
-            pa[c] = pwa[c] + corr + ra * pd[c]
-            pb[c] = pwb[c] - corr - rb * pd[c]
+            qa, qb = _meet(pwa[c], pwb[c], dist * pd[c])
+            pa[c] = qa + ra * pd[c]
+            pb[c] = qb - rb * pd[c]
         return _set_out(out, dist - ra - rb, nrm[0], nrm[1], nrm[2], pa, pb, iters, scale)
     vn = math.sqrt(_dot(v, v))
     if flag != _GJK_OVERLAP:

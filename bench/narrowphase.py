@@ -16,7 +16,11 @@ For every shape-type pair (canonical order, plane last) the same seeded cases
            bounding-sphere pre-test included, its broad phase finds nothing).  Timed:
            ``mujoco.mj_collision(model, data)`` after one ``mj_kinematics``; divided by
            the pair count.  Convex = MJCF mesh (MuJoCo builds the hull); MuJoCo has no
-           cone: n/a.
+           cone: n/a.  Run twice: with MuJoCo's defaults (ccd_tolerance 1e-6 m,
+           ccd_iterations 35 in 4.0.0) and "tight" (1e-8 m and 255, our EPA_REL_TOL *
+           scale and EPA_MAX_ITERS).  Its accuracy against ours is reported on the pairs
+           both find penetrating deeper than 1e-3 * scale (mujoco_accuracy): the angle
+           between the normals' lines and the depth difference.
   coal     a Python loop of ``coal.collide`` (CollisionRequest with enable_contact,
            num_max_contacts=1) over prebuilt geometries and Transform3s, and separately
            a loop of ``coal.distance`` (signed distance); per pair, loop overhead included.
@@ -39,9 +43,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from bench.common import (KINDS, _fmt, coal_geometry, coal_transform, mujoco_assets_xml,  # noqa: E402
                           mujoco_geom, pair_cases, timed, wxyz)
-from mkcollision_ros.kernels.constants import (M_AUTO, M_GJK_EPA, M_MPR, OUT_SIZE,  # noqa: E402
-                                               ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
-                                               ST_TOUCHING)
+from mkcollision_ros.kernels.constants import (EPA_MAX_ITERS, M_AUTO, M_GJK_EPA, M_MPR,  # noqa: E402
+                                               OUT_SIZE, ST_FAILED, ST_NOT_RUN,
+                                               ST_PENETRATING, ST_TOUCHING)
 from mkcollision_ros.kernels.narrowphase import collide_batch  # noqa: E402
 
 METHODS = (("gjk_epa", M_GJK_EPA, np.inf), ("mpr", M_MPR, np.inf), ("auto", M_AUTO, np.inf),
@@ -80,18 +84,56 @@ def build_mujoco(shapes, pos, quat, n):
     return model, data
 
 
-def run_mujoco(shapes, pos, quat, n, repeat):
+def run_mujoco(shapes, pos, quat, n, repeat, tight=False):
+    """MuJoCo's collision pass on the cases: (time per pair, hit flags, normals, depths).
+    ``tight``: its convex solver held to our accuracy (ccd_tolerance 1e-8 m, about our
+    EPA_REL_TOL * scale here, and ccd_iterations = our EPA_MAX_ITERS) instead of its
+    defaults (1e-6 m, 35 iterations)."""
     import mujoco
     built = build_mujoco(shapes, pos, quat, n)
     if built is None:
-        return None, None
+        return None, None, None, None
     model, data = built
+    if tight:
+        model.opt.ccd_tolerance = 1e-8
+        model.opt.ccd_iterations = EPA_MAX_ITERS
     mujoco.mj_collision(model, data)
     t = timed(lambda: mujoco.mj_collision(model, data), repeat) / n
     hit = np.zeros(n, bool)
     g = data.contact.geom[:data.ncon]
     hit[g[:, 0] // 2] = True
-    return t, hit
+    # per pair: the normal of its first contact (MuJoCo's frame row 0) and its deepest
+    # contact's distance; NaN where MuJoCo reports none
+    normal = np.full((n, 3), np.nan)
+    dist = np.full(n, np.nan)
+    for c in range(data.ncon - 1, -1, -1):
+        k = data.contact.geom[c, 0] // 2
+        normal[k] = data.contact.frame[c, :3]
+        dist[k] = min(data.contact.dist[c], np.nan_to_num(dist[k], nan=np.inf))
+    return t, hit, normal, dist
+
+
+def mujoco_accuracy(out, hit, nrm_mj, dist_mj, table, pairs):
+    """MuJoCo's contact normal and depth against ours (auto, exact distances, world
+    frame) on the pairs both call penetrating deeper than 1e-3 of the scale (sum of
+    the two bounding radii), where the normal is well defined: the largest and 99th
+    percentile angle between the normals' lines (mrad) and the largest depth
+    difference (units of 1e-6 * scale).
+    Ours is the reference: its normal is within ~5e-4 rad of the exact one and its
+    depth within 1e-8 * scale (gjk_epa.py, EPA_REL_TOL); MuJoCo stops its EPA at
+    ccd_tolerance = 1e-6 m, about 100x looser here, in fewer steps."""
+    if nrm_mj is None:
+        return "n/a"
+    scale = table.params[pairs[:, 0], 7] + table.params[pairs[:, 1], 7]
+    use = hit & np.isfinite(dist_mj) & (out[:, 0] < -1e-3 * scale)
+    if not np.any(use):
+        return "n/a"
+    # sign-agnostic (a lower bound of MuJoCo's error): its collision functions differ
+    # in which way a contact normal points when it swaps a pair's geoms
+    cos = np.clip(np.abs(np.sum(nrm_mj[use] * out[use, 1:4], axis=1)), 0.0, 1.0)
+    ang = np.arccos(cos) * 1e3
+    dd = np.abs(dist_mj[use] - out[use, 0]) / scale[use] * 1e6
+    return f"{ang.max():.2g} / {np.percentile(ang, 99):.2g}, {dd.max():.3g}"
 
 
 def run_coal(shapes, pos, quat, n, repeat):
@@ -153,9 +195,9 @@ def bench(n, repeat, seed, only=None):
             for name, m, cutoff in METHODS:
                 t, st, out = run_ours(table, pairs, pos, quat, m, repeat, cutoff)
                 if np.all(st == ST_NOT_RUN):
-                    ours[name] = (None, None)
+                    ours[name] = (None, None, None)
                     continue
-                ours[name] = (t, st)
+                ours[name] = (t, st, out)
                 bad = np.flatnonzero((st == ST_FAILED) | ~np.isfinite(out[:, 0]))
                 if len(bad):
                     problems.append((a, b, name, len(bad), int(bad[0])))
@@ -164,7 +206,10 @@ def bench(n, repeat, seed, only=None):
             st_c = ours["contacts"][1]
             if not np.array_equal((st_c == ST_TOUCHING) | (st_c == ST_PENETRATING), hit):
                 problems.append((a, b, "contacts differ from auto", 0, 0))
-            t_mj, hit_mj = run_mujoco(shapes, pos, quat, n, repeat)
+            t_mj, hit_mj, nrm_mj, dist_mj = run_mujoco(shapes, pos, quat, n, repeat)
+            acc = mujoco_accuracy(ours["auto"][2], hit, nrm_mj, dist_mj, table, pairs)
+            t_mjt, _, nrm_mjt, dist_mjt = run_mujoco(shapes, pos, quat, n, repeat, tight=True)
+            acc_t = mujoco_accuracy(ours["auto"][2], hit, nrm_mjt, dist_mjt, table, pairs)
             t_cc, t_cd, hit_cc = run_coal(shapes, pos, quat, n, max(1, repeat // 3))
             same = {}
             for name in ("gjk_epa", "mpr"):
@@ -184,13 +229,15 @@ def bench(n, repeat, seed, only=None):
                 _pct(None if hit_mj is None else float(np.mean(hit_mj == hit))),
                 _pct(float(np.mean(hit_cc == hit))),
                 f"{_pct(same['gjk_epa'])}/{_pct(same['mpr'])}",
+                acc, _us(t_mjt), _ratio(t_con, t_mjt), acc_t,
             ])
             print(f"  done {a}-{b}", file=sys.stderr, flush=True)
     head = ["pair", "n", "hit % (auto)", "gjk_epa µs", "mpr µs", "auto µs", "contacts µs",
             "mujoco µs", "coal collide µs", "coal distance µs", "auto/mujoco",
             "contacts/mujoco", "best/mujoco",
             "auto/coal collide", "agree mujoco %", "agree coal %",
-            "gjk/mpr agree auto %"]
+            "gjk/mpr agree auto %", "mujoco vs ours: normal line mrad max / p99, depth max (1e-6 scale)",
+            "mujoco tight µs", "contacts/mujoco tight", "mujoco tight vs ours"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     for r in rows:

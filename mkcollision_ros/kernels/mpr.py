@@ -47,39 +47,35 @@ from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
                         ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
 from .geometry import centre_core, minkowski_support_xyz, shape_scale
-from .jit import njit_kernel
+from .jit import njit_inline, njit_kernel
+
+# The working rows are w, wa, wb (5, 3): support points of D = A - B and of A and B,
+# row 0 the interior point v0, rows 1-3 the portal, row 4 the new support point.
+# Vectors are handled as scalar triples (no array temporaries: an earlier version built
+# a small array per cross product and difference, and spent most of its time in the
+# allocator: sphere-sphere 1.4 us per pair).
 
 
-@njit_kernel
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+@njit_inline
+def _cross_rows(w, i, j, k):
+    """(w[j] - w[i]) x (w[k] - w[i]) as three floats."""
+    ux, uy, uz = w[j, 0] - w[i, 0], w[j, 1] - w[i, 1], w[j, 2] - w[i, 2]
+    vx, vy, vz = w[k, 0] - w[i, 0], w[k, 1] - w[i, 1], w[k, 2] - w[i, 2]
+    return uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
 
 
-@njit_kernel
-def _cross(a, b):
-    o = np.empty(3)
-    o[0] = a[1] * b[2] - a[2] * b[1]
-    o[1] = a[2] * b[0] - a[0] * b[2]
-    o[2] = a[0] * b[1] - a[1] * b[0]
-    return o
-
-
-@njit_kernel
-def _norm(a):
-    return math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-
-
-@njit_kernel
-def _support(sa, sb, verts, r_ab, t_ab, d, w, wa, wb, k):
-    """Support of D along ``d`` into row ``k`` of w, wa, wb (each (5, 3))."""
-    ax, ay, az, bx, by, bz = minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, d[0], d[1],
-                                                   d[2], False)
+@njit_inline
+def _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k):
+    """Support of D along (dx, dy, dz) into row ``k`` of w, wa, wb; returns w[k] . d."""
+    ax, ay, az, bx, by, bz = minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy,
+                                                   dz, False)
     wa[k, 0], wa[k, 1], wa[k, 2] = ax, ay, az
     wb[k, 0], wb[k, 1], wb[k, 2] = bx, by, bz
     w[k, 0], w[k, 1], w[k, 2] = ax - bx, ay - by, az - bz
+    return w[k, 0] * dx + w[k, 1] * dy + w[k, 2] * dz
 
 
-@njit_kernel
+@njit_inline
 def _copy_row(w, wa, wb, src, dst):
     for i in range(3):
         w[dst, i] = w[src, i]
@@ -87,42 +83,82 @@ def _copy_row(w, wa, wb, src, dst):
         wb[dst, i] = wb[src, i]
 
 
-@njit_kernel
-def _write_separated(w, wa, k, d, out, iters):
+@njit_inline
+def _write_separated(w, wa, k, dx, dy, dz, out, iters):
     """Separation proven by support row k along direction d: write the lower bound."""
-    dn = _norm(d)
-    n = d / dn
-    dist = -_dot(w[k], n)
+    dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+    nx, ny, nz = dx / dn, dy / dn, dz / dn
+    dist = -(w[k, 0] * nx + w[k, 1] * ny + w[k, 2] * nz)
     if dist < 0.0:
         dist = 0.0
     out[OUT_DIST] = dist
-    for i in range(3):
-        out[OUT_NORMAL + i] = n[i]
-        out[OUT_PA + i] = wa[k, i]
-        out[OUT_PB + i] = wa[k, i] + dist * n[i]
+    out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
+    out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = wa[k, 0], wa[k, 1], wa[k, 2]
+    out[OUT_PB] = wa[k, 0] + dist * nx
+    out[OUT_PB + 1] = wa[k, 1] + dist * ny
+    out[OUT_PB + 2] = wa[k, 2] + dist * nz
     out[OUT_ITERS] = iters
     out[OUT_METHOD] = M_MPR
     return ST_SEPARATED
 
 
-@njit_kernel
+@njit_inline
+def _write_support_plane(w, wa, out, iters):
+    """The ray from v0 meets the boundary at v1, whose support plane has normal -v0:
+    write that contact (origin on the segment v0-v1, or a degenerate portal).  Returns
+    the signed distance."""
+    n0 = math.sqrt(w[0, 0] * w[0, 0] + w[0, 1] * w[0, 1] + w[0, 2] * w[0, 2])
+    nx, ny, nz = -w[0, 0] / n0, -w[0, 1] / n0, -w[0, 2] / n0
+    dist = -(w[1, 0] * nx + w[1, 1] * ny + w[1, 2] * nz)
+    out[OUT_DIST] = dist
+    out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
+    out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = wa[1, 0], wa[1, 1], wa[1, 2]
+    out[OUT_PB] = wa[1, 0] + dist * nx
+    out[OUT_PB + 1] = wa[1, 1] + dist * ny
+    out[OUT_PB + 2] = wa[1, 2] + dist * nz
+    out[OUT_ITERS] = iters
+    out[OUT_METHOD] = M_MPR
+    return dist
+
+
+@njit_inline
+def _portal_normal(w):
+    """Unit outward normal (away from the interior point v0) of the portal (rows 1-3)
+    and True, or zeros and False for a degenerate portal."""
+    nx, ny, nz = _cross_rows(w, 1, 2, 3)
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if not nn > 0.0:
+        return 0.0, 0.0, 0.0, False
+    nx, ny, nz = nx / nn, ny / nn, nz / nn
+    if (nx * (w[1, 0] - w[0, 0]) + ny * (w[1, 1] - w[0, 1])
+            + nz * (w[1, 2] - w[0, 2])) < 0.0:
+        nx, ny, nz = -nx, -ny, -nz
+    return nx, ny, nz, True
+
+
+@njit_inline
+def _bary(ax, ay, az, bx, by, bz, nx, ny, nz):
+    """(a x b) . n"""
+    return (ay * bz - az * by) * nx + (az * bx - ax * bz) * ny + (ax * by - ay * bx) * nz
+
+
+@njit_inline
 def _write_portal(w, wa, wb, out, iters, scale):
     """Result from the portal (rows 1, 2, 3): depth along its normal, barycentric
     witnesses at the origin's projection onto the portal plane.  Returns the signed
     distance, or NaN when the portal is degenerate."""
-    n = _cross(w[2] - w[1], w[3] - w[1])
-    nn = _norm(n)
-    if not nn > 0.0:
+    nx, ny, nz, ok = _portal_normal(w)
+    if not ok:
         return np.nan
-    n /= nn
-    if _dot(n, w[1] - w[0]) < 0.0:   # outward: away from the interior point v0
-        n = -n
-    off = _dot(n, w[1])               # > 0: origin behind the portal (inside)
-    q = off * n                       # projection of the origin on the portal plane
+    off = nx * w[1, 0] + ny * w[1, 1] + nz * w[1, 2]    # > 0: origin behind the portal
+    qx, qy, qz = off * nx, off * ny, off * nz           # origin projected on the plane
     # barycentric coordinates of q in (w1, w2, w3) from sub-triangle areas along n
-    l1 = _dot(_cross(w[2] - q, w[3] - q), n)
-    l2 = _dot(_cross(w[3] - q, w[1] - q), n)
-    l3 = _dot(_cross(w[1] - q, w[2] - q), n)
+    p1x, p1y, p1z = w[1, 0] - qx, w[1, 1] - qy, w[1, 2] - qz
+    p2x, p2y, p2z = w[2, 0] - qx, w[2, 1] - qy, w[2, 2] - qz
+    p3x, p3y, p3z = w[3, 0] - qx, w[3, 1] - qy, w[3, 2] - qz
+    l1 = _bary(p2x, p2y, p2z, p3x, p3y, p3z, nx, ny, nz)
+    l2 = _bary(p3x, p3y, p3z, p1x, p1y, p1z, nx, ny, nz)
+    l3 = _bary(p1x, p1y, p1z, p2x, p2y, p2z, nx, ny, nz)
     s = l1 + l2 + l3
     if not abs(s) > 0.0:
         l1, l2, l3, s = 1.0, 0.0, 0.0, 1.0
@@ -131,17 +167,17 @@ def _write_portal(w, wa, wb, out, iters, scale):
     l3 /= s
     dist = -off
     out[OUT_DIST] = dist
+    out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
     for i in range(3):
         pa = l1 * wa[1, i] + l2 * wa[2, i] + l3 * wa[3, i]
-        out[OUT_NORMAL + i] = n[i]
         out[OUT_PA + i] = pa
-        out[OUT_PB + i] = pa + dist * n[i]
+        out[OUT_PB + i] = pa + dist * out[OUT_NORMAL + i]
     out[OUT_ITERS] = iters
     out[OUT_METHOD] = M_MPR
     return dist
 
 
-@njit_kernel
+@njit_inline
 def _status(dist, scale):
     tol = TOUCH_TOL * scale
     if dist > tol:
@@ -151,9 +187,13 @@ def _status(dist, scale):
     return ST_PENETRATING
 
 
+MPR_WS_ROWS = 17     # rows of the float64 (rows, 3) scratch buffer of ``mpr_ws``
+
+
 @njit_kernel
 def mpr(sa, sb, verts, r_ab, t_ab, out):
-    """Minkowski Portal Refinement on the whole shapes (see the module docstring).
+    """Minkowski Portal Refinement on the whole shapes (see the module docstring);
+    allocates its scratch buffer, batch callers use ``mpr_ws``.
 
     sa, sb  shape tuples (code int64, prm float64[8], v0 int64, vn int64)
     verts   float64 (M, 3) convex vertices (body frames)
@@ -163,19 +203,23 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
     Returns ST_SEPARATED, ST_TOUCHING, ST_PENETRATING or ST_FAILED (iteration cap);
     ST_NOT_RUN (``out`` untouched) when either shape is a PLANE (no support mapping).
     """
+    return mpr_ws(sa, sb, verts, r_ab, t_ab, out, np.empty((MPR_WS_ROWS, 3)))
+
+
+@njit_kernel
+def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
+    """``mpr`` with a caller-provided scratch buffer ``buf`` float64 (MPR_WS_ROWS, 3):
+    rows 0-4 w, 5-9 wa, 10-14 wb, 15-16 the two centres."""
     if sa[0] == PLANE or sb[0] == PLANE:
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)
     tol = MPR_REL_TOL * scale
-    w = np.zeros((5, 3))
-    wa = np.zeros((5, 3))
-    wb = np.zeros((5, 3))
+    w, wa, wb = buf[0:5], buf[5:10], buf[10:15]
     for i in range(3):
         out[i] = 0.0
 
     # ---- phase 1: interior point and origin ray ---------------------------------------
-    ca = np.empty(3)
-    cbl = np.empty(3)
+    ca, cbl = buf[15], buf[16]
     centre_core(sa[0], sa[1], verts, sa[2], sa[3], ca)
     centre_core(sb[0], sb[1], verts, sb[2], sb[3], cbl)
     for i in range(3):
@@ -183,58 +227,55 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
         w[0, i] = ca[i] - cb
         wa[0, i] = ca[i]
         wb[0, i] = cb
-    if _norm(w[0]) <= 1e-12 * scale:
+    if math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2) <= 1e-12 * scale:
         # centres coincide: the origin is interior; any ray direction will do
         w[0, 0] = 1e-9 * scale
         w[0, 1] = 0.0
         w[0, 2] = 0.0
 
-    d = -w[0]
-    _support(sa, sb, verts, r_ab, t_ab, d, w, wa, wb, 1)
-    if _dot(w[1], d) <= 0.0:
-        return _write_separated(w, wa, 1, d, out, 1.0)
+    dx, dy, dz = -w[0, 0], -w[0, 1], -w[0, 2]
+    if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, 1) <= 0.0:
+        return _write_separated(w, wa, 1, dx, dy, dz, out, 1.0)
 
-    d = _cross(w[1], w[0])
-    if _norm(d) <= 1e-14 * _norm(w[1]) * _norm(w[0]):
+    # d = v1 x v0
+    dx = w[1, 1] * w[0, 2] - w[1, 2] * w[0, 1]
+    dy = w[1, 2] * w[0, 0] - w[1, 0] * w[0, 2]
+    dz = w[1, 0] * w[0, 1] - w[1, 1] * w[0, 0]
+    n1 = math.sqrt(w[1, 0] ** 2 + w[1, 1] ** 2 + w[1, 2] ** 2)
+    n0 = math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2)
+    if math.sqrt(dx * dx + dy * dy + dz * dz) <= 1e-14 * n1 * n0:
         # origin on the segment v0-v1: the ray meets the boundary at v1, whose support
         # plane has normal -v0 (exact supporting plane)
-        n = -w[0] / _norm(w[0])
-        dist = -_dot(w[1], n)
-        out[OUT_DIST] = dist
-        for i in range(3):
-            out[OUT_NORMAL + i] = n[i]
-            out[OUT_PA + i] = wa[1, i]
-            out[OUT_PB + i] = wa[1, i] + dist * n[i]
-        out[OUT_ITERS] = 1.0
-        out[OUT_METHOD] = M_MPR
-        return _status(dist, scale)
+        return _status(_write_support_plane(w, wa, out, 1.0), scale)
 
     # ---- phase 2: portal discovery -----------------------------------------------------
-    _support(sa, sb, verts, r_ab, t_ab, d, w, wa, wb, 2)
-    if _dot(w[2], d) <= 0.0:
-        return _write_separated(w, wa, 2, d, out, 2.0)
-    n = _cross(w[1] - w[0], w[2] - w[0])
-    if _dot(n, w[0]) > 0.0:
+    if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, 2) <= 0.0:
+        return _write_separated(w, wa, 2, dx, dy, dz, out, 2.0)
+    nx, ny, nz = _cross_rows(w, 0, 1, 2)
+    if nx * w[0, 0] + ny * w[0, 1] + nz * w[0, 2] > 0.0:
         _copy_row(w, wa, wb, 1, 4)
         _copy_row(w, wa, wb, 2, 1)
         _copy_row(w, wa, wb, 4, 2)
-        n = -n
+        nx, ny, nz = -nx, -ny, -nz
     iters = 2
     found = False
     while iters < MPR_MAX_ITERS:
         iters += 1
-        if not _norm(n) > 0.0:
+        if not math.sqrt(nx * nx + ny * ny + nz * nz) > 0.0:
             break
-        _support(sa, sb, verts, r_ab, t_ab, n, w, wa, wb, 3)
-        if _dot(w[3], n) <= 0.0:
-            return _write_separated(w, wa, 3, n, out, float(iters))
-        if _dot(_cross(w[1], w[3]), w[0]) < 0.0:
-            _copy_row(w, wa, wb, 3, 2)          # origin outside (v0, v1, v3): replace v2
-            n = _cross(w[1] - w[0], w[3] - w[0])
+        if _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 3) <= 0.0:
+            return _write_separated(w, wa, 3, nx, ny, nz, out, float(iters))
+        # (v1 x v3) . v0 < 0: origin outside (v0, v1, v3), replace v2
+        if _bary(w[1, 0], w[1, 1], w[1, 2], w[3, 0], w[3, 1], w[3, 2],
+                 w[0, 0], w[0, 1], w[0, 2]) < 0.0:
+            _copy_row(w, wa, wb, 3, 2)
+            nx, ny, nz = _cross_rows(w, 0, 1, 3)
             continue
-        if _dot(_cross(w[3], w[2]), w[0]) < 0.0:
-            _copy_row(w, wa, wb, 3, 1)          # origin outside (v0, v3, v2): replace v1
-            n = _cross(w[3] - w[0], w[2] - w[0])
+        # (v3 x v2) . v0 < 0: origin outside (v0, v3, v2), replace v1
+        if _bary(w[3, 0], w[3, 1], w[3, 2], w[2, 0], w[2, 1], w[2, 2],
+                 w[0, 0], w[0, 1], w[0, 2]) < 0.0:
+            _copy_row(w, wa, wb, 3, 1)
+            nx, ny, nz = _cross_rows(w, 0, 3, 2)
             continue
         found = True
         break
@@ -252,34 +293,32 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
 
     # ---- phase 3: portal refinement ----------------------------------------------------
     while True:
-        n = _cross(w[2] - w[1], w[3] - w[1])
-        nn = _norm(n)
-        if not nn > 0.0:
+        nx, ny, nz, ok = _portal_normal(w)
+        if not ok:
             break                              # degenerate portal: report as is
-        n /= nn
-        if _dot(n, w[1] - w[0]) < 0.0:
-            n = -n
         if iters >= MPR_MAX_ITERS:
             dist = _write_portal(w, wa, wb, out, float(iters), scale)
             if dist != dist:
                 out[OUT_DIST] = 0.0
             return ST_FAILED
         iters += 1
-        _support(sa, sb, verts, r_ab, t_ab, n, w, wa, wb, 4)
-        h = _dot(w[4], n)
+        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 4)
         if h < 0.0:
-            return _write_separated(w, wa, 4, n, out, float(iters))
-        if h - _dot(w[1], n) <= tol:
+            return _write_separated(w, wa, 4, nx, ny, nz, out, float(iters))
+        if h - (w[1, 0] * nx + w[1, 1] * ny + w[1, 2] * nz) <= tol:
             break                              # portal within tolerance of the boundary
-        # keep the ray from v0 through the origin inside the new portal's cone
-        x = _cross(w[4], w[0])
-        if _dot(w[1], x) > 0.0:
-            if _dot(w[2], x) > 0.0:
+        # keep the ray from v0 through the origin inside the new portal's cone:
+        # x = v4 x v0, then the sign of v_i . x picks the vertex to replace
+        xx = w[4, 1] * w[0, 2] - w[4, 2] * w[0, 1]
+        xy = w[4, 2] * w[0, 0] - w[4, 0] * w[0, 2]
+        xz = w[4, 0] * w[0, 1] - w[4, 1] * w[0, 0]
+        if w[1, 0] * xx + w[1, 1] * xy + w[1, 2] * xz > 0.0:
+            if w[2, 0] * xx + w[2, 1] * xy + w[2, 2] * xz > 0.0:
                 _copy_row(w, wa, wb, 4, 1)
             else:
                 _copy_row(w, wa, wb, 4, 3)
         else:
-            if _dot(w[3], x) > 0.0:
+            if w[3, 0] * xx + w[3, 1] * xy + w[3, 2] * xz > 0.0:
                 _copy_row(w, wa, wb, 4, 2)
             else:
                 _copy_row(w, wa, wb, 4, 1)
@@ -287,13 +326,5 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
     dist = _write_portal(w, wa, wb, out, float(iters), scale)
     if dist != dist:
         # degenerate portal (all three points on a line): fall back to v1's support plane
-        n = -w[0] / _norm(w[0])
-        dist = -_dot(w[1], n)
-        out[OUT_DIST] = dist
-        for i in range(3):
-            out[OUT_NORMAL + i] = n[i]
-            out[OUT_PA + i] = wa[1, i]
-            out[OUT_PB + i] = wa[1, i] + dist * n[i]
-        out[OUT_ITERS] = float(iters)
-        out[OUT_METHOD] = M_MPR
+        dist = _write_support_plane(w, wa, out, float(iters))
     return _status(dist, scale)

@@ -236,7 +236,8 @@ def bench(n, repeat, seed, only=None):
             "mujoco µs", "coal collide µs", "coal distance µs", "auto/mujoco",
             "contacts/mujoco", "best/mujoco",
             "auto/coal collide", "agree mujoco %", "agree coal %",
-            "gjk/mpr agree auto %", "mujoco vs ours: normal line mrad max / p99, depth max (1e-6 scale)",
+            "gjk/mpr agree auto %",
+            "mujoco vs ours: normal line mrad max / p99, depth max (1e-6 scale)",
             "mujoco tight µs", "contacts/mujoco tight", "mujoco tight vs ours"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))

@@ -84,13 +84,15 @@ def _copy_row(w, wa, wb, src, dst):
 
 
 @njit_inline
-def _write_separated(w, wa, k, dx, dy, dz, out, iters):
-    """Separation proven by support row k along direction d: write the lower bound."""
+def _write_plane(w, wa, k, dx, dy, dz, floor, out, iters):
+    """The contact given by the support plane of row k along the direction d: normal
+    d / |d|, signed distance -(w[k] . n) raised to ``floor``, pa = A's support point,
+    pb = pa + distance * n.  Returns the distance."""
     dn = math.sqrt(dx * dx + dy * dy + dz * dz)
     nx, ny, nz = dx / dn, dy / dn, dz / dn
     dist = -(w[k, 0] * nx + w[k, 1] * ny + w[k, 2] * nz)
-    if dist < 0.0:
-        dist = 0.0
+    if dist < floor:
+        dist = floor
     out[OUT_DIST] = dist
     out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
     out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = wa[k, 0], wa[k, 1], wa[k, 2]
@@ -99,6 +101,14 @@ def _write_separated(w, wa, k, dx, dy, dz, out, iters):
     out[OUT_PB + 2] = wa[k, 2] + dist * nz
     out[OUT_ITERS] = iters
     out[OUT_METHOD] = M_MPR
+    return dist
+
+
+@njit_inline
+def _write_separated(w, wa, k, dx, dy, dz, out, iters):
+    """Separation proven by support row k along direction d: write the lower bound
+    (>= 0)."""
+    _write_plane(w, wa, k, dx, dy, dz, 0.0, out, iters)
     return ST_SEPARATED
 
 
@@ -107,18 +117,7 @@ def _write_support_plane(w, wa, out, iters):
     """The ray from v0 meets the boundary at v1, whose support plane has normal -v0:
     write that contact (origin on the segment v0-v1, or a degenerate portal).  Returns
     the signed distance."""
-    n0 = math.sqrt(w[0, 0] * w[0, 0] + w[0, 1] * w[0, 1] + w[0, 2] * w[0, 2])
-    nx, ny, nz = -w[0, 0] / n0, -w[0, 1] / n0, -w[0, 2] / n0
-    dist = -(w[1, 0] * nx + w[1, 1] * ny + w[1, 2] * nz)
-    out[OUT_DIST] = dist
-    out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
-    out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = wa[1, 0], wa[1, 1], wa[1, 2]
-    out[OUT_PB] = wa[1, 0] + dist * nx
-    out[OUT_PB + 1] = wa[1, 1] + dist * ny
-    out[OUT_PB + 2] = wa[1, 2] + dist * nz
-    out[OUT_ITERS] = iters
-    out[OUT_METHOD] = M_MPR
-    return dist
+    return _write_plane(w, wa, 1, -w[0, 0], -w[0, 1], -w[0, 2], -np.inf, out, iters)
 
 
 @njit_inline

@@ -45,16 +45,18 @@ ELLIPSOID_SAMPLED_SUBDIV = 3
 
 # Scratch buffers ``ws`` of one chunk of pairs, a plain tuple (m, rows, gjk) of few
 # arrays (numba reference-counts each array passed to a function): m float64
-# (14 + MPR_WS_ROWS, 3) = world rotations ra (rows 0-2), rb (3-5), the relative pose
-# r_ab (6-8) / t_ab (9), the swapped pose r_ba (10-12) / t_ba (13), then mpr_ws's
+# (_POSE_ROWS + MPR_WS_ROWS, 3) = world rotations ra (rows 0-2), rb (3-5), the relative
+# pose r_ab (6-8) / t_ab (9), the swapped pose r_ba (10-12) / t_ba (13), then mpr_ws's
 # scratch; rows float64 (2, OUT_SIZE) = result rows row and tmp; gjk =
 # gjk_epa.make_gjk_workspace().
+_POSE_ROWS = 14
 
 
 @njit_kernel
 def make_workspace():
     """Fresh scratch buffers for ``collide_pair_ws`` / ``collide_world_ws``."""
-    return (np.empty((14 + MPR_WS_ROWS, 3)), np.empty((2, OUT_SIZE)), make_gjk_workspace())
+    return (np.empty((_POSE_ROWS + MPR_WS_ROWS, 3)), np.empty((2, OUT_SIZE)),
+            make_gjk_workspace())
 
 
 @njit_kernel
@@ -113,7 +115,7 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
-        st = mpr_ws(sa, sb, verts, r_ab, t_ab, out, ws[0][14:])
+        st = mpr_ws(sa, sb, verts, r_ab, t_ab, out, ws[0][_POSE_ROWS:])
         if st == ST_SEPARATED and out[OUT_DIST] <= TOUCH_TOL * shape_scale(sa, sb):
             # MPR's distance for a separated pair is only a lower bound, so within the
             # touching band it cannot tell touching from apart: GJK decides, and the

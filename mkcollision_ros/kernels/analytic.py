@@ -58,7 +58,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, 
                         P_MARGIN, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, shape_scale, support_full_xyz
+from .geometry import inflation, meet, shape_scale, support_full_xyz
 from .jit import njit_inline, njit_kernel
 
 
@@ -918,11 +918,10 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
         else:
             qz += sp
         px, py, pz = g0 + up * c0, g1 + up * c1, g2 + up * c2
-        # split any mismatch so that pb - pa == -depth n exactly
-        hx = 0.5 * ((px - qx) + depth * nx)
-        hy = 0.5 * ((py - qy) + depth * ny)
-        hz = 0.5 * ((pz - qz) + depth * nz)
-        qx, qy, qz = qx + hx, qy + hy, qz + hz
+        # split any mismatch so that pb - pa == -depth n exactly (A's point kept)
+        qx = meet(qx, px, -(depth * nx))[0]
+        qy = meet(qy, py, -(depth * ny))[0]
+        qz = meet(qz, pz, -(depth * nz))[0]
     dist = _finish_s(qx, qy, qz, -depth, nx, ny, nz, ra, rb, out)
     return classify(dist, scale)
 

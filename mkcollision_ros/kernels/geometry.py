@@ -57,6 +57,16 @@ def quat_to_matrix(q):
     return r
 
 
+@njit_inline
+def meet(a, b, sn):
+    """One coordinate of a pair of witness points a (on A), b (on B) moved by halves of
+    the remainder so that b - a == sn exactly, sn being that coordinate of the signed
+    distance times the normal (-depth * n when penetrating).  Returns (a, b).  Shared
+    by GJK/EPA's results and the closed forms."""
+    corr = 0.5 * ((b - a) - sn)
+    return a + corr, b - corr
+
+
 @njit_kernel
 def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
     """Pose of B in A's frame from two world poses: returns (r_ab (3, 3), t_ab (3,)).

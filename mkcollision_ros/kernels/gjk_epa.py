@@ -104,7 +104,7 @@ from .constants import (BOX, CONVEX, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
                         OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
                         ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, minkowski_support_xyz, shape_scale
+from .geometry import inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of pairs by the batch
@@ -709,15 +709,6 @@ def _face_plane(V, F, FN, FD, f, cin):
 
 
 @njit_inline
-def _meet(a, b, sn):
-    """One coordinate of a pair of witness points a (on A), b (on B) moved by halves of
-    the remainder so that b - a == sn exactly, sn being that coordinate of the signed
-    distance times the normal (-depth * n when penetrating).  Returns (a, b)."""
-    corr = 0.5 * ((b - a) - sn)
-    return a + corr, b - corr
-
-
-@njit_inline
 def _tangent_basis(nx, ny, nz):
     """Orthonormal tangent vectors (e1, e2) at the unit direction n, as six floats:
     e1 from n's two components other than a large x, e2 = n x e1."""
@@ -1157,7 +1148,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         res[0] = dep
         for c in range(3):
             res[1 + c] = d[c]
-            res[4 + c], res[7 + c] = _meet(wa[c], wb[c], -(dep * d[c]))
+            res[4 + c], res[7 + c] = meet(wa[c], wb[c], -(dep * d[c]))
         return it + n_pol, True, dep - lb, True
     # witness: projection of the origin on the best face, in barycentric coordinates
     i, j, k = F[best, 0], F[best, 1], F[best, 2]
@@ -1174,6 +1165,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     nz = ux * wy - uy * wx
     nn = nx * nx + ny * ny + nz * nz
     clean = False
+    on_face = False
     if nn > 0.0:
         bx, by, bz = V[j, 0] - px, V[j, 1] - py, V[j, 2] - pz
         cx, cy, cz = V[k, 0] - px, V[k, 1] - py, V[k, 2] - pz
@@ -1185,13 +1177,12 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         m2 = 1.0 - m0 - m1
         # inside the face: the witnesses are convex combinations of support points
         clean = min(m0, min(m1, m2)) >= -1e-9 and max(m0, max(m1, m2)) <= 1.0 + 1e-9
-        # far outside the face means a sliver face: keep the clamped closest point
-        if min(m0, min(m1, m2)) > -0.1 and max(m0, max(m1, m2)) < 1.1:
+        # far outside the face means a sliver face: the clamped closest point instead
+        # (as for a degenerate face)
+        on_face = min(m0, min(m1, m2)) > -0.1 and max(m0, max(m1, m2)) < 1.1
+        if on_face:
             l3[0], l3[1], l3[2] = m0, m1, m2
-        else:
-            l3[0], l3[1], l3[2], dd = _tri_closest(V[i, 0], V[i, 1], V[i, 2], V[j, 0], V[j, 1],
-                                                   V[j, 2], V[k, 0], V[k, 1], V[k, 2])
-    else:
+    if not on_face:
         l3[0], l3[1], l3[2], dd = _tri_closest(V[i, 0], V[i, 1], V[i, 2], V[j, 0], V[j, 1],
                                                V[j, 2], V[k, 0], V[k, 1], V[k, 2])
     res[0] = dep
@@ -1202,7 +1193,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     # enforce pb - pa == -dep * n (exact already unless the clamped point was used),
     # splitting any correction between the two points
     for c in range(3):
-        res[4 + c], res[7 + c] = _meet(res[4 + c], res[7 + c], -(dep * FN[best, c]))
+        res[4 + c], res[7 + c] = meet(res[4 + c], res[7 + c], -(dep * FN[best, c]))
     if not converged and ub < np.inf:
         # caps hit (a valley of equally deep directions, e.g. a point on a cone's axis):
         # polish the upper bound h(ud) by a pattern search over directions, report it
@@ -1242,7 +1233,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
             pa += fv[_LAM + i] * fs[_WA + i, c]
             pb += fv[_LAM + i] * fs[_WB + i, c]
         pb -= sh * res[1 + c]
-        res[4 + c], res[7 + c] = _meet(pa, pb, -(dep * res[1 + c]))
+        res[4 + c], res[7 + c] = meet(pa, pb, -(dep * res[1 + c]))
     return it
 
 
@@ -1303,7 +1294,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         dist = -_dot(pd, pw)
         for c in range(3):
             nrm[c] = pd[c]
-            qa, qb = _meet(pwa[c], pwb[c], dist * pd[c])
+            qa, qb = meet(pwa[c], pwb[c], dist * pd[c])
             pa[c] = qa + ra * pd[c]
             pb[c] = qb - rb * pd[c]
         return _set_out(out, dist - ra - rb, nrm[0], nrm[1], nrm[2], pa, pb, iters, scale)

@@ -96,6 +96,21 @@ def _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
 
 
+@njit_inline
+def _mpr(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
+    """Method MPR on an ordered pair without a plane."""
+    st = mpr_ws(sa, sb, verts, r_ab, t_ab, out, ws[0][_POSE_ROWS:])
+    if st == ST_SEPARATED and out[OUT_DIST] <= TOUCH_TOL * shape_scale(sa, sb):
+        # MPR's distance for a separated pair is only a lower bound, so within the
+        # touching band it cannot tell touching from apart: GJK decides, and the one
+        # touching rule holds on this path too.
+        iters = out[OUT_ITERS]
+        st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
+        out[OUT_ITERS] += iters
+        out[OUT_METHOD] = M_MPR
+    return st
+
+
 @njit_kernel
 def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """Run ``method`` on a pair already in canonical order; result in A's frame.
@@ -104,7 +119,9 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     if method == M_AUTO and sa[0] == BOX and sb[0] == BOX:
         return _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff)
     if method == M_AUTO or method == M_ANALYTIC:
-        st = collide_analytic(sa, sb, verts, r_ab, t_ab, out)
+        # (the guard saves a call that would only find no closed form)
+        st = (collide_analytic(sa, sb, verts, r_ab, t_ab, out)
+              if _has_closed_form(sa[0], sb[0], sb[1]) else ST_NOT_RUN)
         if st != ST_NOT_RUN or method == M_ANALYTIC or has_plane:
             if st == ST_NOT_RUN:
                 _blank(out, method)
@@ -115,16 +132,7 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     if method == M_MPR:
         if has_plane:
             return ST_NOT_RUN
-        st = mpr_ws(sa, sb, verts, r_ab, t_ab, out, ws[0][_POSE_ROWS:])
-        if st == ST_SEPARATED and out[OUT_DIST] <= TOUCH_TOL * shape_scale(sa, sb):
-            # MPR's distance for a separated pair is only a lower bound, so within the
-            # touching band it cannot tell touching from apart: GJK decides, and the
-            # one touching rule holds on this path too.
-            iters = out[OUT_ITERS]
-            st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
-            out[OUT_ITERS] += iters
-            out[OUT_METHOD] = M_MPR
-        return st
+        return _mpr(sa, sb, verts, r_ab, t_ab, out, ws, cutoff)
     if method == M_ELLIPSOID_EXACT or method == M_ELLIPSOID_SAMPLED:
         # The ellipsoid test decides the status (touching or not); its own distance is
         # in the unit-sphere frame of A, so the metric distance, normal and witness
@@ -265,11 +273,13 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
                       shape_scale(sa, sb))
     elif method == M_AUTO and code_a == BOX and code_b == BOX:
         st = _box_box(sa, sb, verts, r_ab, t_ab, row, ws, cutoff)
-    elif method == M_AUTO and code_a <= code_b and code_b != PLANE:
-        # no closed form: straight to GJK/EPA, as collide_pair_ws would go after three
-        # calls that pass ~80 words of array structs each (measured: a third of an
-        # apart pair's time)
+    elif code_a <= code_b and code_b != PLANE and (method == M_AUTO or method == M_GJK_EPA):
+        # no closed form (or none asked for): straight to GJK/EPA, where
+        # collide_pair_ws would go after three calls that pass ~80 words of array
+        # structs each (measured: a third of an apart pair's time)
         st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, row, ws[2], cutoff)
+    elif code_a <= code_b and code_b != PLANE and method == M_MPR:
+        st = _mpr(sa, sb, verts, r_ab, t_ab, row, ws, cutoff)
     else:
         st = collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, row, ws, cutoff)
     out[OUT_DIST] = row[OUT_DIST]

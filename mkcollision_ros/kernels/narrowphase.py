@@ -276,7 +276,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     elif code_a <= code_b and code_b != PLANE and (method == M_AUTO or method == M_GJK_EPA):
         # no closed form (or none asked for): straight to GJK/EPA, where
         # collide_pair_ws would go after three calls that pass ~80 words of array
-        # structs each (measured: a third of an apart pair's time)
+        # structs each (measured: about a quarter of an apart pair's time, 0.33 ->
+        # 0.24 us on cylinder pairs)
         st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, row, ws[2], cutoff)
     elif code_a <= code_b and code_b != PLANE and method == M_MPR:
         st = _mpr(sa, sb, verts, r_ab, t_ab, row, ws, cutoff)

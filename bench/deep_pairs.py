@@ -44,6 +44,7 @@ from bench.common import KINDS, pair_cases, quat_to_matrix  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
 from mkcollision_ros.kernels import mpr as MP  # noqa: E402
 from mkcollision_ros.kernels.constants import OUT_ITERS, OUT_SIZE  # noqa: E402
+from mkcollision_ros.kernels.geometry import relative_pose  # noqa: E402
 from mkcollision_ros.kernels.jit import borrow  # noqa: E402
 
 ROWS = ("cylinder-cylinder", "box-cylinder", "ellipsoid-cylinder", "capsule-cylinder",
@@ -82,12 +83,12 @@ def load_cases(folder, row):
 
 
 def relative_poses(pos, quat):
+    """Pose of B in A's frame per case (geometry.relative_pose, as the API computes it)."""
     rot = np.zeros((N, 3, 3))
     tr = np.zeros((N, 3))
     for k in range(N):
-        ra, rb = quat_to_matrix(quat[2 * k]), quat_to_matrix(quat[2 * k + 1])
-        rot[k] = ra.T @ rb
-        tr[k] = ra.T @ (pos[2 * k + 1] - pos[2 * k])
+        rot[k], tr[k] = relative_pose(pos[2 * k], quat_to_matrix(quat[2 * k]),
+                                      pos[2 * k + 1], quat_to_matrix(quat[2 * k + 1]))
     return rot, tr
 
 

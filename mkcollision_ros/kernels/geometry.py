@@ -30,7 +30,7 @@ import numpy as np
 
 from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_MARGIN,
                         P_ROLL, PLANE, SPHERE)
-from .jit import njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel
 
 
 @njit_inline
@@ -192,6 +192,17 @@ def centre_core(code, prm, verts, v0, vn, out):
         out[0] /= vn
         out[1] /= vn
         out[2] /= vn
+
+
+@njit_inline
+def borrow_args(sa, sb, verts, r_ab, t_ab):
+    """The pair arguments of a kernel as owner-less views (jit.borrow): a kernel that
+    is called (not inlined) re-borrows its array arguments first, so that the reference
+    counts numba updates for every view it takes are on null meminfos, which numba's
+    reference-count pruning removes at compile time; on the arguments as passed the
+    calls stay (unknown meminfo), one or two per view taken."""
+    return ((sa[0], borrow(sa[1]), sa[2], sa[3]), (sb[0], borrow(sb[1]), sb[2], sb[3]),
+            borrow(verts), borrow(r_ab), borrow(t_ab))
 
 
 @njit_inline

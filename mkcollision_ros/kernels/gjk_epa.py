@@ -104,8 +104,8 @@ from .constants import (BOX, CONVEX, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
                         OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
                         ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, meet, minkowski_support_xyz, shape_scale
-from .jit import njit_inline, njit_kernel
+from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
+from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of pairs by the batch
 # kernel and reused pair after pair; no state survives from one pair to the next.  Three
@@ -169,6 +169,12 @@ _GJK_CAP = 2         # iteration cap hit
 _GJK_BOUND = 3       # stopped early: the cores are farther apart than the caller's stop
                      # distance (v is not the closest point; the returned bound is)
 _GJK_POLISHED = 4    # apart, minimum found by _newton_min_support (ws t3 rows 15-18)
+
+
+@njit_inline
+def _borrow_ws(ws):
+    """The workspace as owner-less views (geometry.borrow_args says why)."""
+    return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]))
 
 
 @njit_inline
@@ -545,6 +551,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
 @njit_kernel
 def _set_out(out, dist, nx, ny, nz, pa, pb, iters, scale):
     """Fill a result row in A's frame and return the status by the touching rule."""
+    out, pa, pb = borrow(out), borrow(pa), borrow(pb)
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     ok = nn > 0.0 and math.isfinite(nn) and math.isfinite(dist)
     for c in range(3):
@@ -590,6 +597,8 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
     shapes along directions normal to its affine hull.  Returns the new count (4), or
     -1 when the Minkowski difference is flat there (touching, depth 0); on -1 the unit
     normal of the flat direction is in W[3].  W, WA, WB: the workspace's simplex."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = _borrow_ws(ws)
     W, WA, WB = ws[0][_W:_W + 4], ws[0][_WA:_WA + 4], ws[0][_WB:_WB + 4]
     d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     cand = ws[0][_CAND:_CAND + 6]
@@ -729,6 +738,8 @@ def _tangent_basis(nx, ny, nz):
 def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws):
     """Pattern search for min over unit u of h_{A-B}(u) starting at ``ud`` (3,) with
     value ``ub``; updates ud and uwa (A's support point) in place, returns the value."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ud, uwa, ws = borrow(ud), borrow(uwa), _borrow_ws(ws)
     d, wa, wb, w = ws[0][_T3 + 19], ws[0][_T3 + 20], ws[0][_T3 + 21], ws[0][_T3 + 22]
     e1, e2 = ws[0][_T3 + 23], ws[0][_T3 + 24]
     step = 1e-2
@@ -786,6 +797,8 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
     direction, the difference point and the support points of A and B are left in ws
     t3 rows 15-18 (the caller's d, wa, wb, w stay as they were).
     Returns the number of support evaluations, negated when it gave up."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = _borrow_ws(ws)
     fs = ws[0]
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
     if ns < 2:
@@ -861,6 +874,8 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
     """_newton_min_support started at the normal of EPA's best face f, whose support
     point (ws t3 rows 8-11: d, wa, wb, w) is at hand; its first samples are the face's
     vertices (EPA stored the direction of each, VD).  Same return and results."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = _borrow_ws(ws)
     fs = ws[0]
     V, VD = fs[_V:_V + _NVMAX], fs[_VD:_VD + _NVMAX]
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
@@ -931,6 +946,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     [depth, nx, ny, nz, pa(3), pb(3)] (normal =
     outward normal of A - B at its boundary point closest to the origin = A to B) and
     returns (iterations, converged)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = _borrow_ws(ws)
     nvmax = EPA_MAX_ITERS + 4
     fs, fv, iv = ws[0], ws[1], ws[2]
     W, WA, WB, res = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4], fv[_RES:_RES + 10]
@@ -1221,6 +1238,8 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     the pair is made to satisfy pb - pa == -depth * n by splitting the remainder (at most
     ~the shift).  Updates res[4:10] (A's frame) and returns the GJK iterations, or 0
     and leaves res as it is when GJK does not report the shapes apart."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws, res = _borrow_ws(ws), borrow(res)
     dep = res[0]
     sh = dep + EPA_WITNESS_SHIFT * scale
     t2 = ws[0][_T3 + 13]
@@ -1268,6 +1287,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     witness points, which then are not the closest points.  A pipeline that wants
     contacts only passes 0 and saves the GJK steps that would refine a distance it
     throws away (as MuJoCo's collision pass, which reports no distances, does)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = _borrow_ws(ws)
+    out = borrow(out)
     nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
     _fallback_normal(t_ab, nrm)
     for c in range(3):

@@ -46,8 +46,8 @@ from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, ST_FAILED,
                         ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
-from .geometry import centre_core, minkowski_support_xyz, shape_scale
-from .jit import njit_inline, njit_kernel
+from .geometry import borrow_args, centre_core, minkowski_support_xyz, shape_scale
+from .jit import borrow, njit_inline, njit_kernel
 
 # The working rows are w, wa, wb (5, 3): support points of D = A - B and of A and B,
 # row 0 the interior point v0, rows 1-3 the portal, row 4 the new support point.
@@ -209,6 +209,8 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
 def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
     """``mpr`` with a caller-provided scratch buffer ``buf`` float64 (MPR_WS_ROWS, 3):
     rows 0-4 w, 5-9 wa, 10-14 wb, 15-16 the two centres."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    out, buf = borrow(out), borrow(buf)
     if sa[0] == PLANE or sb[0] == PLANE:
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)

@@ -34,7 +34,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_A
                         OUT_SIZE, P_MARGIN, P_RADIUS, PLANE, SPHERE, ST_NOT_RUN,
                         ST_SEPARATED, TOUCH_TOL)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
-from .geometry import quat_to_matrix_into, shape_scale
+from .geometry import borrow_args, quat_to_matrix_into, shape_scale
 from .gjk_epa import gjk_epa_ws, make_gjk_workspace
 from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_inline, njit_kernel,
                   njit_parallel, prange)
@@ -57,6 +57,13 @@ def make_workspace():
     """Fresh scratch buffers for ``collide_pair_ws`` / ``collide_world_ws``."""
     return (np.empty((_POSE_ROWS + MPR_WS_ROWS, 3)), np.empty((2, OUT_SIZE)),
             make_gjk_workspace())
+
+
+@njit_inline
+def _borrow_ws(ws):
+    """The workspace as owner-less views (geometry.borrow_args says why)."""
+    return (borrow(ws[0]), borrow(ws[1]),
+            (borrow(ws[2][0]), borrow(ws[2][1]), borrow(ws[2][2])))
 
 
 @njit_kernel
@@ -115,6 +122,8 @@ def _mpr(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
 def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """Run ``method`` on a pair already in canonical order; result in A's frame.
     ``cutoff`` (m): see gjk_epa.gjk_epa_ws (closed forms are exact at any distance)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    out, ws = borrow(out), _borrow_ws(ws)
     has_plane = sa[0] == PLANE or sb[0] == PLANE
     if method == M_AUTO and sa[0] == BOX and sb[0] == BOX:
         return _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff)
@@ -174,6 +183,8 @@ def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     ``r_ab``/``t_ab`` may be ws[0][6:9]/ws[0][9] (only r_ba, t_ba, tmp, gjk are written).
     ``cutoff`` (m, may be inf): farther pairs may stop at a distance lower bound
     (gjk_epa.gjk_epa_ws)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    out, ws = borrow(out), _borrow_ws(ws)
     _blank(out, method)
     if sa[0] <= sb[0]:
         st = _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff)
@@ -313,8 +324,7 @@ def _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, c
     pairs, pos_w, quat_w = borrow(pairs), borrow(pos_w), borrow(quat_w)
     out, status = borrow(out), borrow(status)
     own = make_workspace()
-    ws = (borrow(own[0]), borrow(own[1]),
-          (borrow(own[2][0]), borrow(own[2][1]), borrow(own[2][2])))
+    ws = _borrow_ws(own)
     for k in range(lo, hi):
         i = pairs[k, 0]
         j = pairs[k, 1]

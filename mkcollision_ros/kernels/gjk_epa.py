@@ -172,8 +172,9 @@ _GJK_POLISHED = 4    # apart, minimum found by _newton_min_support (ws t3 rows 1
 
 
 @njit_inline
-def _borrow_ws(ws):
-    """The workspace as owner-less views (geometry.borrow_args says why)."""
+def borrow_gjk_workspace(ws):
+    """A ``make_gjk_workspace()`` tuple as owner-less views (geometry.borrow_args says
+    why); the caller keeps the owner alive."""
     return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]))
 
 
@@ -598,7 +599,7 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
     -1 when the Minkowski difference is flat there (touching, depth 0); on -1 the unit
     normal of the flat direction is in W[3].  W, WA, WB: the workspace's simplex."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = _borrow_ws(ws)
+    ws = borrow_gjk_workspace(ws)
     W, WA, WB = ws[0][_W:_W + 4], ws[0][_WA:_WA + 4], ws[0][_WB:_WB + 4]
     d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
     cand = ws[0][_CAND:_CAND + 6]
@@ -739,7 +740,7 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
     """Pattern search for min over unit u of h_{A-B}(u) starting at ``ud`` (3,) with
     value ``ub``; updates ud and uwa (A's support point) in place, returns the value."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ud, uwa, ws = borrow(ud), borrow(uwa), _borrow_ws(ws)
+    ud, uwa, ws = borrow(ud), borrow(uwa), borrow_gjk_workspace(ws)
     d, wa, wb, w = ws[0][_T3 + 19], ws[0][_T3 + 20], ws[0][_T3 + 21], ws[0][_T3 + 22]
     e1, e2 = ws[0][_T3 + 23], ws[0][_T3 + 24]
     step = 1e-2
@@ -798,7 +799,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
     t3 rows 15-18 (the caller's d, wa, wb, w stay as they were).
     Returns the number of support evaluations, negated when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = _borrow_ws(ws)
+    ws = borrow_gjk_workspace(ws)
     fs = ws[0]
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
     if ns < 2:
@@ -875,7 +876,7 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
     point (ws t3 rows 8-11: d, wa, wb, w) is at hand; its first samples are the face's
     vertices (EPA stored the direction of each, VD).  Same return and results."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = _borrow_ws(ws)
+    ws = borrow_gjk_workspace(ws)
     fs = ws[0]
     V, VD = fs[_V:_V + _NVMAX], fs[_VD:_VD + _NVMAX]
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
@@ -947,7 +948,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     outward normal of A - B at its boundary point closest to the origin = A to B) and
     returns (iterations, converged)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = _borrow_ws(ws)
+    ws = borrow_gjk_workspace(ws)
     nvmax = EPA_MAX_ITERS + 4
     fs, fv, iv = ws[0], ws[1], ws[2]
     W, WA, WB, res = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4], fv[_RES:_RES + 10]
@@ -1239,7 +1240,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     ~the shift).  Updates res[4:10] (A's frame) and returns the GJK iterations, or 0
     and leaves res as it is when GJK does not report the shapes apart."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws, res = _borrow_ws(ws), borrow(res)
+    ws, res = borrow_gjk_workspace(ws), borrow(res)
     dep = res[0]
     sh = dep + EPA_WITNESS_SHIFT * scale
     t2 = ws[0][_T3 + 13]
@@ -1288,7 +1289,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     contacts only passes 0 and saves the GJK steps that would refine a distance it
     throws away (as MuJoCo's collision pass, which reports no distances, does)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = _borrow_ws(ws)
+    ws = borrow_gjk_workspace(ws)
     out = borrow(out)
     nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
     _fallback_normal(t_ab, nrm)

@@ -35,7 +35,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_A
                         ST_SEPARATED, TOUCH_TOL)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import borrow_args, quat_to_matrix_into, shape_scale
-from .gjk_epa import gjk_epa_ws, make_gjk_workspace
+from .gjk_epa import borrow_gjk_workspace, gjk_epa_ws, make_gjk_workspace
 from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_inline, njit_kernel,
                   njit_parallel, prange)
 from .mpr import MPR_WS_ROWS, mpr_ws
@@ -62,8 +62,7 @@ def make_workspace():
 @njit_inline
 def _borrow_ws(ws):
     """The workspace as owner-less views (geometry.borrow_args says why)."""
-    return (borrow(ws[0]), borrow(ws[1]),
-            (borrow(ws[2][0]), borrow(ws[2][1]), borrow(ws[2][2])))
+    return borrow(ws[0]), borrow(ws[1]), borrow_gjk_workspace(ws[2])
 
 
 @njit_kernel

@@ -132,14 +132,17 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
             return 0.0, 0.0, h
         return bx, by, -h
     elif code == CONVEX:
+        # over a view from 0, not range(v0, v0 + vn): LLVM then knows the index is not
+        # negative and drops numba's wraparound of signed indices in this hot loop
+        pts = verts[v0:v0 + vn]
         best = -np.inf
-        k = v0
-        for i in range(v0, v0 + vn):
-            v = verts[i, 0] * dx + verts[i, 1] * dy + verts[i, 2] * dz
+        k = 0
+        for i in range(vn):
+            v = pts[i, 0] * dx + pts[i, 1] * dy + pts[i, 2] * dz
             if v > best:
                 best = v
                 k = i
-        return verts[k, 0], verts[k, 1], verts[k, 2]
+        return pts[k, 0], pts[k, 1], pts[k, 2]
     # PLANE has no support point; callers route planes to the half-space path
     return 0.0, 0.0, 0.0
 

@@ -53,8 +53,11 @@ shallower local minimum; also missed by the first version of the oracle's search
 mkc_kink_newton_wrong_basin_cylinder_cylinder and
 mkc_kink_newton_close_basin_capsule_cylinder (a version along the creases of cylinders
 and capsules, not adopted, kept local minima 0.33 and 0.047 rad from the deepest
-direction), mkc_coincident_coaxial_cylinders (two cylinders at one pose: a ring of
-equally deep directions, EPA's caps hit, reported FAILED and dropped by the pipeline).
+direction), mkc_crease_polish_other_crease_cylinder_cylinder (the crease search EPA
+adopted in session 11, before it searched both cylinders' creases, kept B's crease
+minimum 0.19 rad from the deepest direction on A's), mkc_coincident_coaxial_cylinders
+(two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
+reported FAILED and dropped by the pipeline).
 
 A failing scene names a bug in the library: the test is kept as is and the failure is
 reported; tolerances are not loosened to make a scene pass.

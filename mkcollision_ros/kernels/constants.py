@@ -62,8 +62,13 @@ EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the 
                            # < tol * scale, and once more at 0.01 * tol * scale if it gave up
 EPA_POLISH_ITERS = 6       # its steps (support evaluations)
 EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
-EPA_POLISH_CAP = 0.5       # its minimum is kept only if EPA's faces deeper than it lie
-                           # within this angle of its normal (rad; gjk_epa._polish_is_global)
+EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther than this
+                           # from its normal can be deeper by EPA's faces (rad;
+                           # gjk_epa._polish_is_global)
+EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (gjk_epa._kink_polish)
+                           # when the best face's normal n has |n . axis| below this
+EPA_KINK_ITERS = 8         # its support evaluations
+EPA_KINK_STEP = 0.1        # longest step it may take along the side's circle (rad)
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

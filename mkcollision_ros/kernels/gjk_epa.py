@@ -44,9 +44,18 @@ Phases of ``gjk_epa``
      EPA_REL_TOL * scale.  Fixed buffers: EPA_MAX_ITERS vertices, EPA_MAX_FACES faces.
      With an ellipsoid (same rule), at a gain of EPA_POLISH_TOL * scale (and once
      more 100x closer if it gives up) Newton's method is tried from the best face's
-     normal, and its minimum kept only if no EPA face deeper than it lies outside a
-     cap of EPA_POLISH_CAP around its normal (_polish_is_global: another basin could
-     be deeper; regression scene mkc_epa_polish_wrong_basin_ellipsoid_cone).
+     normal, and its minimum kept only if no direction outside a cap of
+     EPA_POLISH_CAP around its normal can be deeper by EPA's faces (_polish_is_global:
+     another basin could be deeper; regression scene
+     mkc_epa_polish_wrong_basin_ellipsoid_cone).  With a cylinder (and the other shape
+     a cylinder, sphere or ellipsoid, _kink_partner), when the best face's normal is
+     near the crease of the cylinder's side (the great circle normal to its axis),
+     the minimum along that crease is searched instead (_kink_polish, secant steps on
+     h's derivative along the circle), with the checks across the crease and, between
+     two cylinders, against the other crease and the point kinks nearby, and the same
+     cap test: deep cylinder-cylinder pairs 5.2 -> 3.9 us, ellipsoid-cylinder 6.2 ->
+     4.4 (bench/deep_pairs.py; no depth on 20,000 deep random pairs per row off EPA's
+     own by more than 1e-8 * scale).
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
@@ -97,12 +106,13 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CONVEX, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP, EPA_MAX_FACES,
+from .constants import (BOX, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP,
+                        EPA_KINK_ITERS, EPA_KINK_NEAR, EPA_KINK_STEP, EPA_MAX_FACES,
                         EPA_MAX_ITERS, EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP,
                         EPA_POLISH_TOL, EPA_REL_TOL, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
                         GJK_FLAT_TOL, GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
-                        OUT_SIZE, PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
+                        OUT_SIZE, PLANE, SPHERE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
                         ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
@@ -901,25 +911,244 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
 
 
 @njit_inline
-def _polish_is_global(V, F, FD, nf, n, hmin):
-    """Whether the local minimum h(n) found by _epa_polish is the global one, up to
-    the polytope's resolution.  The ray from the origin along any unit direction u
-    leaves the polytope (which lies inside A - B) through some face g, and FD[g] <= the
-    depth of A - B's boundary along u.  So if every face with FD < hmin = h(n) - tol
-    lies, with all three vertices, in the cap of directions within EPA_POLISH_CAP rad
-    of n, no direction outside that cap reaches deeper than hmin; inside the cap, the
-    minimum Newton's method converged to is taken to be the only one (the fitted
-    Hessian was positive definite there).  A face deeper than hmin outside the cap
-    means another basin may be deeper (measured: an ellipsoid-cone pair whose polished
-    minimum was 2e-4 * scale too shallow, its normal 2.8 rad off): EPA goes on."""
+def _kink_partner(code):
+    """Whether _kink_polish may run against a shape of this code: a cylinder (whose
+    crease and point kinks it searches too) or one with no kinks (sphere and
+    ellipsoid cores).  Boxes, cones, convex hulls and capsule cores put creases and
+    flat faces near the minimum that it does not rule out (box-cylinder and
+    cylinder-convex pairs gained nothing when it ran there, capsule-cylinder pairs
+    lost 2% with their creases searched as well)."""
+    return code == CYLINDER or code == ELLIPSOID or code == SPHERE
+
+
+@njit_inline
+def _kink_side(sa, sb, r_ab, dx, dy, dz):
+    """Whose cylinder side the unit direction d is near: 0 for A's, 1 for B's (|d .
+    axis| < EPA_KINK_NEAR, the other shape a _kink_partner), -1 for neither or both
+    (near both, the minimum is likely where the two circles cross, on a flat face of
+    A - B that EPA resolves itself)."""
+    na = sa[0] == CYLINDER and _kink_partner(sb[0]) and abs(dz) < EPA_KINK_NEAR
+    nb = sb[0] == CYLINDER and _kink_partner(sa[0]) and abs(
+        r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz) < EPA_KINK_NEAR
+    if na and not nb:
+        return 0
+    if nb and not na:
+        return 1
+    return -1
+
+
+@njit_inline
+def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
+    """Secant search for the minimum of h = h_{A-B} along the great circle of
+    directions normal to the unit axis k (a crease of a cylinder's or a capsule core's
+    support function), from the direction d projected onto it.
+
+    Along the circle, u(t) = cos t n + sin t e (e = k x n), h is smooth between the
+    other shape's creases and its derivative is g(t) = w(u(t)) . u'(t), w a support
+    point of A - B (any point of the support segment gives the same g, as u' is
+    normal to k).  Converged when the next step is below 1e-9 rad with |g| <= 1e-6 *
+    scale (a crease of the other shape shows as a jump in g: the secant closes in on
+    the jump with g still large) and a positive secant slope.  Returns (ok, supports
+    evaluated, lowest h evaluated, then at the last point: h, u (3), the support
+    points of A and of B (3 each)); ok is False when it gave up."""
+    c = dx * kx + dy * ky + dz * kz
+    nx, ny, nz = dx - c * kx, dy - c * ky, dz - c * kz
+    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+    ok = False
+    hlow = np.inf
+    hu = ux = uy = uz = pax = pay = paz = pbx = pby = pbz = 0.0
+    if not nn > 0.5:
+        return (ok, 0, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz)
+    nx, ny, nz = nx / nn, ny / nn, nz / nn
+    ex, ey, ez = ky * nz - kz * ny, kz * nx - kx * nz, kx * ny - ky * nx
+    t = 0.0
+    ta = ga = 0.0
+    k_it = 0
+    while k_it < EPA_KINK_ITERS:
+        ct, st = math.cos(t), math.sin(t)
+        ux, uy, uz = ct * nx + st * ex, ct * ny + st * ey, ct * nz + st * ez
+        pax, pay, paz, pbx, pby, pbz = minkowski_support_xyz(
+            sa, sb, verts, r_ab, t_ab, ux, uy, uz, core)
+        qx, qy, qz = pax - pbx, pay - pby, paz - pbz
+        hu = ux * qx + uy * qy + uz * qz
+        hlow = min(hlow, hu)
+        g = (ct * ex - st * nx) * qx + (ct * ey - st * ny) * qy + (ct * ez - st * nz) * qz
+        k_it += 1
+        if k_it == 1:
+            # first step: Newton's with h'' guessed as half the pair's scale
+            step = -g / (0.5 * scale)
+        else:
+            slope = (g - ga) / (t - ta)
+            if not slope > 0.0:
+                break
+            step = -g / slope
+            if abs(step) <= 1e-9:
+                ok = abs(g) <= 1e-6 * scale
+                break
+        step = max(-EPA_KINK_STEP, min(EPA_KINK_STEP, step))
+        ta, ga = t, g
+        t += step
+    return (ok, k_it, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz)
+
+
+@njit_inline
+def _axis_of(side, r_ab):
+    """Axis (z of its body frame) of shape A (side 0) or B (side 1), in A's frame."""
+    if side == 0:
+        return 0.0, 0.0, 1.0
+    return r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+
+
+@njit_inline
+def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
+    """Whether h reaches below ``lim`` at a point kink of h within EPA_POLISH_CAP of the
+    direction u, for a pair of cylinders: the two cap normals of each and the two
+    directions where their creases cross.  Returns (found, supports evaluated)."""
+    cmin = math.cos(EPA_POLISH_CAP)
+    ox, oy, oz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+    cx, cy, cz = -oy, ox, 0.0           # z x o
+    cn = math.sqrt(cx * cx + cy * cy)
+    nev = 0
+    for m in range(6):
+        if m < 2:
+            if not cn > 1e-12:
+                continue
+            px, py, pz = cx / cn, cy / cn, cz / cn
+        elif m < 4:
+            px, py, pz = 0.0, 0.0, 1.0
+        else:
+            px, py, pz = ox, oy, oz
+        if m % 2 == 1:
+            px, py, pz = -px, -py, -pz
+        if px * ux + py * uy + pz * uz < cmin:
+            continue
+        pax, pay, paz, pbx, pby, pbz = minkowski_support_xyz(
+            sa, sb, verts, r_ab, t_ab, px, py, pz, core)
+        nev += 1
+        if px * (pax - pbx) + py * (pay - pby) + pz * (paz - pbz) < lim:
+            return True, nev
+    return False, nev
+
+
+@njit_kernel
+def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
+    """Minimum of h(u) = h_{A-B}(u) over the great circle of directions normal to the
+    axis of a cylinder (A's if side == 0, else B's), from EPA's best face normal d (ws
+    t3 row 8), by _crease_min; then checks that it is the minimum over all directions
+    near it.
+
+    Why: along those directions the cylinder's support is a whole segment of its side,
+    so its support function has a crease there.  When the deepest direction lies on
+    the crease (measured: 436 of 939 deep cylinder-cylinder pairs, 571 of 963 deep
+    ellipsoid-cylinder pairs), A - B has a ruled strip there, curved across; EPA then
+    closes its bounds by a factor of ~2 per step (~30 steps against ~17 where the
+    minimum is on a flat face) and Newton's method in two dimensions gives up on the
+    crease.
+
+    Kept only if h there is the lowest the search evaluated, the point h u lies on
+    A - B's support segment (the cylinder's support point slid along its side by the
+    axial part of w - h u stays within the side: then h rises on both sides of the
+    crease), and, when the other shape is a cylinder too, nothing nearby is deeper:
+    the minimum along its crease (searched from d as well; the deeper of the two
+    converged minima is the candidate, and a search that gave up but went deeper
+    rejects it) and the point kinks of _kink_points.  Where two creases pass close
+    by, each has a minimum of its own (measured on 20,000 deep random pairs per row
+    before this check: 2 cylinder-cylinder pairs whose kept minimum was up to 4.3e-4
+    * scale shallower than the deepest direction, on the other crease 0.18-0.29 rad
+    away; regression scene mkc_kink_newton_wrong_basin_cylinder_cylinder).  The caller
+    then applies _polish_is_global as to Newton's method.  Results as
+    _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
+    A and B, the cylinder's one slid to that point); returns the number of support
+    evaluations, negated when it gave up."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = borrow_gjk_workspace(ws)
+    fs = ws[0]
+    d = fs[_T3 + 8]
+    tol = EPA_REL_TOL * scale
+    kx, ky, kz = _axis_of(side, r_ab)
+    r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, d[0], d[1], d[2])
+    nev = r[1]
+    both = sa[0] == CYLINDER and sb[0] == CYLINDER
+    if both:
+        ox, oy, oz = _axis_of(1 - side, r_ab)
+        r2 = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, ox, oy, oz,
+                         d[0], d[1], d[2])
+        nev += r2[1]
+        if r2[0] and (not r[0] or r2[3] < r[3]):
+            r, r2 = r2, r
+            side = 1 - side
+            kx, ky, kz = ox, oy, oz
+        if r[0] and r2[2] < r[3] - tol:
+            return -nev                 # the other search went deeper without converging
+    ok, _, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz = r
+    if not (ok and hu <= hlow + 1e-12 * scale):
+        return -nev
+    # slide the cylinder's point along its axis to cancel w's axial part
+    s = -((pax - pbx) * kx + (pay - pby) * ky + (paz - pbz) * kz)
+    if side == 0:
+        pax, pay, paz = pax + s * kx, pay + s * ky, paz + s * kz
+        ax_ = paz
+        hh = sa[1][1]
+    else:
+        pbx, pby, pbz = pbx - s * kx, pby - s * ky, pbz - s * kz
+        ax_ = (pbx - t_ab[0]) * kx + (pby - t_ab[1]) * ky + (pbz - t_ab[2]) * kz
+        hh = sb[1][1]
+    if not abs(ax_) <= hh + 1e-12 * scale:
+        return -nev
+    if both:
+        found, nk = _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, hu - tol)
+        nev += nk
+        if found:
+            return -nev
+    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    pd[0], pd[1], pd[2] = ux, uy, uz
+    pw[0], pw[1], pw[2] = pax - pbx, pay - pby, paz - pbz
+    pwa[0], pwa[1], pwa[2] = pax, pay, paz
+    pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+    return nev
+
+
+@njit_inline
+def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes):
+    """Whether the local minimum h(n) found by _epa_polish or _kink_polish is the global
+    one, up to the polytope's resolution.  The ray from the origin along any unit
+    direction u leaves the polytope (which lies inside A - B) through some face g, at
+    the distance FD[g] / (u . FN[g]), and h(u) is at least that distance.  So h(u) <
+    hmin = h(n) - tol needs an exit face with FD[g] < hmin.  Inside a cap of
+    EPA_POLISH_CAP rad around n, the minimum the polish converged to is taken to be the
+    only one; outside it, no direction may reach deeper than hmin:
+
+    * ``planes``: u must lie within acos(FD[g] / hmin) of FN[g] for such a face g, so
+      every such cap must lie within the cap around n.  Used where h has no creases
+      (sphere and ellipsoid cores only) and by _kink_polish, which searches the
+      creases and point kinks nearby itself.  Sharper than the vertex test: the faces
+      along a cylinder's side span ~1.2 rad from the minimum with their planes within
+      the gain of it, which failed the vertex test on every deep cylinder pair
+      polished on the crease.
+    * else every such face must lie, with all three vertices, in the cap around n (as
+      until 2026-11-24).  With the plane test, Newton's method on an ellipsoid against
+      a cylinder or a capsule kept a smooth minimum 0.24-0.40 rad from a deeper one on
+      the other shape's crease or cap normal (3 of 200,000 deep random pairs).
+
+    A face deeper than hmin beyond the cap means another basin may be deeper
+    (measured: an ellipsoid-cone pair whose polished minimum was 2e-4 * scale too
+    shallow, its normal 2.8 rad off): EPA goes on."""
     cmin = math.cos(EPA_POLISH_CAP)
     for f in range(nf):
         if FD[f] < hmin:
-            for q in range(3):
-                i = F[f, q]
-                vn = math.sqrt(V[i, 0] ** 2 + V[i, 1] ** 2 + V[i, 2] ** 2)
-                if V[i, 0] * n[0] + V[i, 1] * n[1] + V[i, 2] * n[2] < cmin * vn:
+            if planes:
+                if not FD[f] > 0.0:
                     return False
+                c = FN[f, 0] * n[0] + FN[f, 1] * n[1] + FN[f, 2] * n[2]
+                if (math.acos(min(1.0, max(-1.0, c))) + math.acos(FD[f] / hmin)
+                        > EPA_POLISH_CAP):
+                    return False
+            else:
+                for q in range(3):
+                    i = F[f, q]
+                    vn = math.sqrt(V[i, 0] ** 2 + V[i, 1] ** 2 + V[i, 2] ** 2)
+                    if V[i, 0] * n[0] + V[i, 1] * n[1] + V[i, 2] * n[2] < cmin * vn:
+                        return False
     return True
 
 
@@ -1021,7 +1250,13 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     # Newton's method (see _smooth_pair for which pairs try it): at a gain of
     # EPA_POLISH_TOL * scale, and once more 100x closer if it gave up
     polish_at = EPA_POLISH_TOL * scale
-    tries = 2 if _smooth_pair(sa[0], sb[0]) else 0
+    # and along a cylinder's side where the best face's normal is near it (_kink_polish)
+    smooth = _smooth_pair(sa[0], sb[0])
+    creaseless = ((sa[0] == ELLIPSOID or sa[0] == SPHERE)
+                  and (sb[0] == ELLIPSOID or sb[0] == SPHERE))
+    kinks = ((sa[0] == CYLINDER and _kink_partner(sb[0]))
+             or (sb[0] == CYLINDER and _kink_partner(sa[0])))
+    tries = 2 if (smooth or kinks) else 0
     n_pol = 0
     vis_tol = EPA_DEGEN_TOL * scale
     best = 0
@@ -1065,22 +1300,30 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             converged = True
             break
         if tries > 0 and gain <= polish_at:
-            # close to the minimum: Newton's method where the boundary is smooth; where
-            # it gives up EPA goes on, and it is tried once more 100x closer
-            tries -= 1
-            polish_at *= 0.01
-            k_pol = _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, best)
-            n_pol += abs(k_pol)
-            if k_pol > 0 and _polish_is_global(V, F, FD, nf, fs[_T3 + 15],
-                                               _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol):
-                for c in range(3):
-                    d[c] = fs[_T3 + 15, c]
-                    w[c] = fs[_T3 + 16, c]
-                    wa[c] = fs[_T3 + 17, c]
-                    wb[c] = fs[_T3 + 18, c]
-                polished = True
-                converged = True
-                break
+            # close to the minimum: Newton's method where the boundary is smooth, the
+            # secant along a cylinder's side near its crease; where they give up EPA
+            # goes on, and they are tried once more 100x closer (a cylinder pair with
+            # the normal near no crease keeps its tries for later steps)
+            side = _kink_side(sa, sb, r_ab, d[0], d[1], d[2])
+            if side >= 0 or smooth:
+                tries -= 1
+                polish_at *= 0.01
+                if side >= 0:
+                    k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side)
+                else:
+                    k_pol = _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, best)
+                n_pol += abs(k_pol)
+                if k_pol > 0 and _polish_is_global(
+                        V, F, FN, FD, nf, fs[_T3 + 15],
+                        _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol, side >= 0 or creaseless):
+                    for c in range(3):
+                        d[c] = fs[_T3 + 15, c]
+                        w[c] = fs[_T3 + 16, c]
+                        wa[c] = fs[_T3 + 17, c]
+                        wb[c] = fs[_T3 + 18, c]
+                    polished = True
+                    converged = True
+                    break
         it += 1
         # faces seen from w: a flood fill over the face adjacency from the best face,
         # so the removed region is connected (a disk) and the polytope stays a

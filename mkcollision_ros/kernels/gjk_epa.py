@@ -937,7 +937,16 @@ def _kink_side(sa, sb, r_ab, dx, dy, dz):
     return -1
 
 
-@njit_inline
+@njit_kernel
+def _support_called(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core):
+    """minkowski_support_xyz called, not inlined: for the crease search, which runs on
+    few pairs and evaluates few supports, where every inlined copy of all the shapes'
+    support mappings lengthened the first compile."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    return minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core)
+
+
+@njit_kernel
 def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
     """Secant search for the minimum of h = h_{A-B} along the great circle of
     directions normal to the unit axis k (a crease of a cylinder's or a capsule core's
@@ -951,6 +960,7 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
     the jump with g still large) and a positive secant slope.  Returns (ok, supports
     evaluated, lowest h evaluated, then at the last point: h, u (3), the support
     points of A and of B (3 each)); ok is False when it gave up."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     c = dx * kx + dy * ky + dz * kz
     nx, ny, nz = dx - c * kx, dy - c * ky, dz - c * kz
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
@@ -967,7 +977,7 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
     while k_it < EPA_KINK_ITERS:
         ct, st = math.cos(t), math.sin(t)
         ux, uy, uz = ct * nx + st * ex, ct * ny + st * ey, ct * nz + st * ez
-        pax, pay, paz, pbx, pby, pbz = minkowski_support_xyz(
+        pax, pay, paz, pbx, pby, pbz = _support_called(
             sa, sb, verts, r_ab, t_ab, ux, uy, uz, core)
         qx, qy, qz = pax - pbx, pay - pby, paz - pbz
         hu = ux * qx + uy * qy + uz * qz
@@ -1022,7 +1032,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
             px, py, pz = -px, -py, -pz
         if px * ux + py * uy + pz * uz < cmin:
             continue
-        pax, pay, paz, pbx, pby, pbz = minkowski_support_xyz(
+        pax, pay, paz, pbx, pby, pbz = _support_called(
             sa, sb, verts, r_ab, t_ab, px, py, pz, core)
         nev += 1
         if px * (pax - pbx) + py * (pay - pby) + pz * (paz - pbz) < lim:

@@ -54,8 +54,8 @@ Phases of ``gjk_epa``
      h's derivative along the circle), with the checks across the crease and, between
      two cylinders, against the other crease and the point kinks nearby, and the same
      cap test: deep cylinder-cylinder pairs 5.2 -> 3.9 us, ellipsoid-cylinder 6.2 ->
-     4.4 (bench/deep_pairs.py; no depth on 20,000 deep random pairs per row off EPA's
-     own by more than 1e-8 * scale).
+     4.4 (bench/deep_pairs.py; no depth on 100,000 deep random pairs per row off EPA's
+     own by more than 1.2e-8 * scale).
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
@@ -922,14 +922,30 @@ def _kink_partner(code):
 
 
 @njit_inline
+def _searched_crease(code, other):
+    """Whether _kink_polish searches the crease of a shape of this code paired with
+    one of code ``other``: a cylinder's, against a _kink_partner."""
+    return code == CYLINDER and _kink_partner(other)
+
+
+@njit_inline
+def _axis_of(side, r_ab):
+    """Axis (z of its body frame) of shape A (side 0) or B (side 1), in A's frame."""
+    if side == 0:
+        return 0.0, 0.0, 1.0
+    return r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+
+
+@njit_inline
 def _kink_side(sa, sb, r_ab, dx, dy, dz):
     """Whose cylinder side the unit direction d is near: 0 for A's, 1 for B's (|d .
     axis| < EPA_KINK_NEAR, the other shape a _kink_partner), -1 for neither or both
     (near both, the minimum is likely where the two circles cross, on a flat face of
     A - B that EPA resolves itself)."""
-    na = sa[0] == CYLINDER and _kink_partner(sb[0]) and abs(dz) < EPA_KINK_NEAR
-    nb = sb[0] == CYLINDER and _kink_partner(sa[0]) and abs(
-        r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz) < EPA_KINK_NEAR
+    ax, ay, az = _axis_of(0, r_ab)
+    bx, by, bz = _axis_of(1, r_ab)
+    na = _searched_crease(sa[0], sb[0]) and abs(ax * dx + ay * dy + az * dz) < EPA_KINK_NEAR
+    nb = _searched_crease(sb[0], sa[0]) and abs(bx * dx + by * dy + bz * dz) < EPA_KINK_NEAR
     if na and not nb:
         return 0
     if nb and not na:
@@ -1002,21 +1018,13 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
 
 
 @njit_inline
-def _axis_of(side, r_ab):
-    """Axis (z of its body frame) of shape A (side 0) or B (side 1), in A's frame."""
-    if side == 0:
-        return 0.0, 0.0, 1.0
-    return r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
-
-
-@njit_inline
 def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
     """Whether h reaches below ``lim`` at a point kink of h within EPA_POLISH_CAP of the
     direction u, for a pair of cylinders: the two cap normals of each and the two
     directions where their creases cross.  Returns (found, supports evaluated)."""
     cmin = math.cos(EPA_POLISH_CAP)
-    ox, oy, oz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
-    cx, cy, cz = -oy, ox, 0.0           # z x o
+    ox, oy, oz = _axis_of(1, r_ab)
+    cx, cy, cz = -oy, ox, 0.0           # z x o (A's axis is z)
     cn = math.sqrt(cx * cx + cy * cy)
     nev = 0
     for m in range(6):
@@ -1025,7 +1033,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
                 continue
             px, py, pz = cx / cn, cy / cn, cz / cn
         elif m < 4:
-            px, py, pz = 0.0, 0.0, 1.0
+            px, py, pz = _axis_of(0, r_ab)
         else:
             px, py, pz = ox, oy, oz
         if m % 2 == 1:
@@ -1062,10 +1070,10 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
     the minimum along its crease (searched from d as well; the deeper of the two
     converged minima is the candidate, and a search that gave up but went deeper
     rejects it) and the point kinks of _kink_points.  Where two creases pass close
-    by, each has a minimum of its own (measured on 20,000 deep random pairs per row
-    before this check: 2 cylinder-cylinder pairs whose kept minimum was up to 4.3e-4
-    * scale shallower than the deepest direction, on the other crease 0.18-0.29 rad
-    away; regression scene mkc_kink_newton_wrong_basin_cylinder_cylinder).  The caller
+    by, each has a minimum of its own (measured before this check: 4 of 40,000 deep
+    random cylinder-cylinder and capsule-cylinder pairs whose kept minimum was up to
+    4.3e-4 * scale shallower than the deepest direction, on the other crease 0.13-0.29
+    rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  The caller
     then applies _polish_is_global as to Newton's method.  Results as
     _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
     A and B, the cylinder's one slid to that point); returns the number of support
@@ -1185,6 +1193,37 @@ def _edge_of(F, g, a, b):
     return -1
 
 
+@njit_inline
+def _nearest_face(FD, nf):
+    """The face slot of least FD among the first ``nf`` (the lowest slot of equals), -1
+    if none is below inf (dead and degenerate faces hold FD = inf).  Four interleaved
+    scans, merged at the end: one chain of compares waited on itself at every slot
+    (perf: ~9% of a deep cylinder-cylinder pair's EPA time)."""
+    b0 = b1 = b2 = b3 = np.inf
+    i0 = i1 = i2 = i3 = -1
+    n4 = nf - nf % 4
+    for f in range(0, n4, 4):
+        if FD[f] < b0:
+            b0, i0 = FD[f], f
+        if FD[f + 1] < b1:
+            b1, i1 = FD[f + 1], f + 1
+        if FD[f + 2] < b2:
+            b2, i2 = FD[f + 2], f + 2
+        if FD[f + 3] < b3:
+            b3, i3 = FD[f + 3], f + 3
+    for f in range(n4, nf):         # the rest after all of scan 0's slots
+        if FD[f] < b0:
+            b0, i0 = FD[f], f
+    # equal values: the lower slot, as one scan in slot order would keep
+    if b1 < b0 or (b1 == b0 and i1 < i0):
+        b0, i0 = b1, i1
+    if b2 < b0 or (b2 == b0 and i2 < i0):
+        b0, i0 = b2, i2
+    if b3 < b0 or (b3 == b0 and i3 < i0):
+        b0, i0 = b3, i3
+    return i0
+
+
 @njit_kernel
 def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
@@ -1264,8 +1303,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     smooth = _smooth_pair(sa[0], sb[0])
     creaseless = ((sa[0] == ELLIPSOID or sa[0] == SPHERE)
                   and (sb[0] == ELLIPSOID or sb[0] == SPHERE))
-    kinks = ((sa[0] == CYLINDER and _kink_partner(sb[0]))
-             or (sb[0] == CYLINDER and _kink_partner(sa[0])))
+    kinks = _searched_crease(sa[0], sb[0]) or _searched_crease(sb[0], sa[0])
     tries = 2 if (smooth or kinks) else 0
     n_pol = 0
     vis_tol = EPA_DEGEN_TOL * scale
@@ -1280,13 +1318,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         uwa[c] = 0.0
     lb = 0.0
     while True:
-        # face closest to the origin
-        best = -1
-        bd = np.inf
-        for f in range(nf):
-            if FD[f] < bd:          # dead and degenerate faces hold FD = inf
-                bd = FD[f]
-                best = f
+        best = _nearest_face(FD, nf)
         if best < 0:
             break
         if it >= EPA_MAX_ITERS or nv >= nvmax:

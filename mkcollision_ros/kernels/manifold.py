@@ -533,8 +533,13 @@ def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out
     writes only its own slots: deterministic for any thread count.  A Python function
     around the parallel kernel ``_manifold_batch`` (see narrowphase.collide_batch).
     """
-    _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                    keep_dist, cpts, cnormal, ccount, n_blocks(rows.shape[0], MANIFOLD_CHUNK))
+    nb = n_blocks(rows.shape[0], MANIFOLD_CHUNK)
+    if nb == 1:   # without the parallel launch (narrowphase.collide_batch)
+        _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                        keep_dist, cpts, cnormal, ccount, 0, rows.shape[0])
+    else:
+        _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
+                        keep_dist, cpts, cnormal, ccount, nb)
 
 
 @njit_kernel

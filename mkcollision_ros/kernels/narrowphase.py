@@ -366,7 +366,16 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cu
     one scratch workspace per block (_collide_block); each pair writes only its own slot
     and no state survives from pair to pair: deterministic for any number of threads.
     A Python function around the parallel kernel ``_collide_batch``, which is given the
-    block count (a kernel asking numba for its thread count cannot be cached).
+    block count (a kernel asking numba for its thread count cannot be cached).  One
+    block runs ``_collide_block`` straight, the same compiled loop without the parallel
+    launch: ~3 us less per call (measured one thread: 6.0 -> 2.7 us for an empty batch,
+    0.043 -> 0.036 us per sphere-sphere pair over 500), which small scenes pay every
+    frame.
     """
-    _collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
-                   out, status, n_blocks(pairs.shape[0], NP_CHUNK))
+    nb = n_blocks(pairs.shape[0], NP_CHUNK)
+    if nb == 1:
+        _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                       out, status, 0, pairs.shape[0])
+    else:
+        _collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
+                       out, status, nb)

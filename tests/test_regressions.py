@@ -55,7 +55,10 @@ mkc_kink_newton_close_basin_capsule_cylinder (a version along the creases of cyl
 and capsules, not adopted, kept local minima 0.33 and 0.047 rad from the deepest
 direction), mkc_crease_polish_other_crease_cylinder_cylinder (the crease search EPA
 adopted in session 11, before it searched both cylinders' creases, kept B's crease
-minimum 0.19 rad from the deepest direction on A's), mkc_coincident_coaxial_cylinders
+minimum 0.19 rad from the deepest direction on A's),
+mkc_crease_polish_wrong_basin_ellipsoid_capsule (the same search on a capsule's crease,
+session 12, under the 0.5 rad basin cap, kept a minimum 0.19 rad from a deeper one off
+the crease), mkc_coincident_coaxial_cylinders
 (two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
 reported FAILED and dropped by the pipeline).
 

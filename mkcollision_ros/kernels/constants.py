@@ -69,6 +69,8 @@ EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (gjk_epa._ki
                            # when the best face's normal n has |n . axis| below this
 EPA_KINK_ITERS = 8         # its support evaluations
 EPA_KINK_STEP = 0.1        # longest step it may take along the side's circle (rad)
+EPA_KINK_CAP_CAPSULE = 0.05  # EPA_POLISH_CAP for a minimum on a capsule's crease (rad):
+                           # deeper minima off it were found 0.09-0.19 rad away
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

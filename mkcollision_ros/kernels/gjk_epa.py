@@ -48,14 +48,16 @@ Phases of ``gjk_epa``
      EPA_POLISH_CAP around its normal can be deeper by EPA's faces (_polish_is_global:
      another basin could be deeper; regression scene
      mkc_epa_polish_wrong_basin_ellipsoid_cone).  With a cylinder (and the other shape
-     a cylinder, sphere or ellipsoid, _kink_partner), when the best face's normal is
-     near the crease of the cylinder's side (the great circle normal to its axis),
-     the minimum along that crease is searched instead (_kink_polish, secant steps on
-     h's derivative along the circle), with the checks across the crease and, between
-     two cylinders, against the other crease and the point kinks nearby, and the same
-     cap test: deep cylinder-cylinder pairs 5.2 -> 3.9 us, ellipsoid-cylinder 6.2 ->
-     4.4 (bench/deep_pairs.py; no depth on 100,000 deep random pairs per row off EPA's
-     own by more than 1.2e-8 * scale).
+     a cylinder, sphere or ellipsoid, _kink_partner) or a capsule (and the other shape
+     a sphere or an ellipsoid; _searched_crease), when the best face's normal is near
+     the crease of the cylinder's side or the capsule's core (the great circle normal
+     to its axis), the minimum along that crease is searched instead (_kink_polish,
+     secant steps on h's derivative along the circle), with the checks across the
+     crease and, between two cylinders, against the other crease and the point kinks
+     nearby, and the same cap test: deep cylinder-cylinder pairs 5.2 -> 3.9 us,
+     ellipsoid-cylinder 6.2 -> 4.4, ellipsoid-capsule 3.6 -> 3.4 (bench/deep_pairs.py;
+     no depth on 100,000 deep random pairs per row off EPA's own by more than 1.2e-8 *
+     scale).
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
@@ -106,14 +108,13 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP,
-                        EPA_KINK_ITERS, EPA_KINK_NEAR, EPA_KINK_STEP, EPA_MAX_FACES,
-                        EPA_MAX_ITERS, EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP,
-                        EPA_POLISH_TOL, EPA_REL_TOL, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
-                        GJK_FLAT_TOL, GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA,
-                        OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
-                        OUT_SIZE, PLANE, SPHERE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING,
-                        ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
+from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP,
+                        EPA_KINK_CAP_CAPSULE, EPA_KINK_ITERS, EPA_KINK_NEAR, EPA_KINK_STEP, EPA_MAX_FACES, EPA_MAX_ITERS,
+                        EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL,
+                        EPA_REL_TOL, EPA_WITNESS_SHIFT, GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS,
+                        GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA, OUT_DIST, OUT_ITERS, OUT_METHOD,
+                        OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE, ST_FAILED, ST_NOT_RUN,
+                        ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -924,8 +925,13 @@ def _kink_partner(code):
 @njit_inline
 def _searched_crease(code, other):
     """Whether _kink_polish searches the crease of a shape of this code paired with
-    one of code ``other``: a cylinder's, against a _kink_partner."""
-    return code == CYLINDER and _kink_partner(other)
+    one of code ``other``: a cylinder's, against a _kink_partner; a capsule's, against
+    a sphere or an ellipsoid (its core, a segment along z, has the same crease as a
+    cylinder's side and no other kink; the capsule's other pairs have closed forms,
+    but capsule-cylinder, whose cylinder's crease is searched without checking the
+    capsule's)."""
+    return ((code == CYLINDER and _kink_partner(other))
+            or (code == CAPSULE and (other == ELLIPSOID or other == SPHERE)))
 
 
 @njit_inline
@@ -938,8 +944,9 @@ def _axis_of(side, r_ab):
 
 @njit_inline
 def _kink_side(sa, sb, r_ab, dx, dy, dz):
-    """Whose cylinder side the unit direction d is near: 0 for A's, 1 for B's (|d .
-    axis| < EPA_KINK_NEAR, the other shape a _kink_partner), -1 for neither or both
+    """Whose crease (a cylinder's side or a capsule's core, _searched_crease) the unit
+    direction d is near: 0 for A's, 1 for B's (|d . axis| < EPA_KINK_NEAR), -1 for
+    neither or both
     (near both, the minimum is likely where the two circles cross, on a flat face of
     A - B that EPA resolves itself)."""
     ax, ay, az = _axis_of(0, r_ab)
@@ -1051,21 +1058,23 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
 @njit_kernel
 def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
     """Minimum of h(u) = h_{A-B}(u) over the great circle of directions normal to the
-    axis of a cylinder (A's if side == 0, else B's), from EPA's best face normal d (ws
-    t3 row 8), by _crease_min; then checks that it is the minimum over all directions
-    near it.
+    axis of a cylinder or a capsule (A's if side == 0, else B's), from EPA's best face
+    normal d (ws t3 row 8), by _crease_min; then checks that it is the minimum over all
+    directions near it.
 
-    Why: along those directions the cylinder's support is a whole segment of its side,
-    so its support function has a crease there.  When the deepest direction lies on
-    the crease (measured: 436 of 939 deep cylinder-cylinder pairs, 571 of 963 deep
-    ellipsoid-cylinder pairs), A - B has a ruled strip there, curved across; EPA then
+    Why: along those directions the cylinder's support is a whole segment of its side
+    (a capsule's: its core segment, grown by the radius), so its support function has
+    a crease there.  When the deepest direction lies on the crease (measured: 436 of
+    939 deep cylinder-cylinder pairs, 571 of 963 deep ellipsoid-cylinder pairs), A - B
+    has a ruled strip there, curved across; EPA then
     closes its bounds by a factor of ~2 per step (~30 steps against ~17 where the
     minimum is on a flat face) and Newton's method in two dimensions gives up on the
     crease.
 
     Kept only if h there is the lowest the search evaluated, the point h u lies on
     A - B's support segment (the cylinder's support point slid along its side by the
-    axial part of w - h u stays within the side: then h rises on both sides of the
+    axial part of w - h u stays within the side, within +-prm[1] along the axis for
+    both shapes: then h rises on both sides of the
     crease), and, when the other shape is a cylinder too, nothing nearby is deeper:
     the minimum along its crease (searched from d as well; the deeper of the two
     converged minima is the candidate, and a search that gave up but went deeper
@@ -1127,14 +1136,17 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
 
 
 @njit_inline
-def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes):
+def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap):
     """Whether the local minimum h(n) found by _epa_polish or _kink_polish is the global
     one, up to the polytope's resolution.  The ray from the origin along any unit
     direction u leaves the polytope (which lies inside A - B) through some face g, at
     the distance FD[g] / (u . FN[g]), and h(u) is at least that distance.  So h(u) <
-    hmin = h(n) - tol needs an exit face with FD[g] < hmin.  Inside a cap of
-    EPA_POLISH_CAP rad around n, the minimum the polish converged to is taken to be the
-    only one; outside it, no direction may reach deeper than hmin:
+    hmin = h(n) - tol needs an exit face with FD[g] < hmin.  Inside a cap of ``cap`` rad
+    around n (EPA_POLISH_CAP; EPA_KINK_CAP_CAPSULE for a minimum on a capsule's crease:
+    at 0.5 rad, 2 of 100,000 deep random ellipsoid-capsule pairs kept a crease minimum
+    up to 4e-5 * scale shallower than a smooth one 0.09-0.19 rad off the crease, both in
+    a valley flat to 1e-4 * scale), the minimum the polish converged to is taken to be
+    the only one; outside it, no direction may reach deeper than hmin:
 
     * ``planes``: u must lie within acos(FD[g] / hmin) of FN[g] for such a face g, so
       every such cap must lie within the cap around n.  Used where h has no creases
@@ -1151,15 +1163,14 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes):
     A face deeper than hmin beyond the cap means another basin may be deeper
     (measured: an ellipsoid-cone pair whose polished minimum was 2e-4 * scale too
     shallow, its normal 2.8 rad off): EPA goes on."""
-    cmin = math.cos(EPA_POLISH_CAP)
+    cmin = math.cos(cap)
     for f in range(nf):
         if FD[f] < hmin:
             if planes:
                 if not FD[f] > 0.0:
                     return False
                 c = FN[f, 0] * n[0] + FN[f, 1] * n[1] + FN[f, 2] * n[2]
-                if (math.acos(min(1.0, max(-1.0, c))) + math.acos(FD[f] / hmin)
-                        > EPA_POLISH_CAP):
+                if math.acos(min(1.0, max(-1.0, c))) + math.acos(FD[f] / hmin) > cap:
                     return False
             else:
                 for q in range(3):
@@ -1191,37 +1202,6 @@ def _edge_of(F, g, a, b):
         if (p == a and q == b) or (p == b and q == a):
             return e
     return -1
-
-
-@njit_inline
-def _nearest_face(FD, nf):
-    """The face slot of least FD among the first ``nf`` (the lowest slot of equals), -1
-    if none is below inf (dead and degenerate faces hold FD = inf).  Four interleaved
-    scans, merged at the end: one chain of compares waited on itself at every slot
-    (perf: ~9% of a deep cylinder-cylinder pair's EPA time)."""
-    b0 = b1 = b2 = b3 = np.inf
-    i0 = i1 = i2 = i3 = -1
-    n4 = nf - nf % 4
-    for f in range(0, n4, 4):
-        if FD[f] < b0:
-            b0, i0 = FD[f], f
-        if FD[f + 1] < b1:
-            b1, i1 = FD[f + 1], f + 1
-        if FD[f + 2] < b2:
-            b2, i2 = FD[f + 2], f + 2
-        if FD[f + 3] < b3:
-            b3, i3 = FD[f + 3], f + 3
-    for f in range(n4, nf):         # the rest after all of scan 0's slots
-        if FD[f] < b0:
-            b0, i0 = FD[f], f
-    # equal values: the lower slot, as one scan in slot order would keep
-    if b1 < b0 or (b1 == b0 and i1 < i0):
-        b0, i0 = b1, i1
-    if b2 < b0 or (b2 == b0 and i2 < i0):
-        b0, i0 = b2, i2
-    if b3 < b0 or (b3 == b0 and i3 < i0):
-        b0, i0 = b3, i3
-    return i0
 
 
 @njit_kernel
@@ -1304,6 +1284,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     creaseless = ((sa[0] == ELLIPSOID or sa[0] == SPHERE)
                   and (sb[0] == ELLIPSOID or sb[0] == SPHERE))
     kinks = _searched_crease(sa[0], sb[0]) or _searched_crease(sb[0], sa[0])
+    capsule = sa[0] == CAPSULE or sb[0] == CAPSULE     # its crease, if one is searched
     tries = 2 if (smooth or kinks) else 0
     n_pol = 0
     vis_tol = EPA_DEGEN_TOL * scale
@@ -1318,7 +1299,13 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         uwa[c] = 0.0
     lb = 0.0
     while True:
-        best = _nearest_face(FD, nf)
+        # face closest to the origin
+        best = -1
+        bd = np.inf
+        for f in range(nf):
+            if FD[f] < bd:          # dead and degenerate faces hold FD = inf
+                bd = FD[f]
+                best = f
         if best < 0:
             break
         if it >= EPA_MAX_ITERS or nv >= nvmax:
@@ -1357,7 +1344,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 n_pol += abs(k_pol)
                 if k_pol > 0 and _polish_is_global(
                         V, F, FN, FD, nf, fs[_T3 + 15],
-                        _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol, side >= 0 or creaseless):
+                        _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol, side >= 0 or creaseless,
+                        EPA_KINK_CAP_CAPSULE if side >= 0 and capsule else EPA_POLISH_CAP):
                     for c in range(3):
                         d[c] = fs[_T3 + 15, c]
                         w[c] = fs[_T3 + 16, c]

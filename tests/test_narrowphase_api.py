@@ -142,6 +142,39 @@ def test_plane_pairs():
     assert r1.normal == pytest.approx([0, 0, -1])   # from the box towards the half-space
 
 
+
+def test_plane_margin_grows_the_half_space():
+    """A plane's margin m grows its half-space n.x <= d to n.x <= d + m, in the world
+    frame path of collide and in the body-frame closed form alike (until session 12
+    the narrow phase dropped it while the broad phase grew the plane by it)."""
+    from mkcollision_ros.kernels.analytic import collide_analytic
+    from mkcollision_ros.shapes import shape_row
+    sphere = {"type": "sphere", "radius": 0.5}
+    # tilted, offset plane body: the half-space z' <= 0.2 (+ 0.1 margin) of its frame
+    s2 = math.sqrt(0.5)
+    pose_p = ([1.0, -2.0, 0.5], [s2, 0.0, 0.0, s2])      # 90 degrees about x: z' = -y
+    for margin, want in ((0.0, 0.3), (0.1, 0.2), (0.4, -0.1)):
+        plane = {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.2,
+                 "margin": margin}
+        # sphere centre 1.0 out along the plane's world normal (-y) from its origin
+        pose_s = ([1.0, -3.0, 0.5], [0.0, 0.0, 0.0, 1.0])
+        r1 = collide(sphere, pose_s, plane, pose_p)
+        r2 = collide(plane, pose_p, sphere, pose_s)
+        assert r1.distance == pytest.approx(want, abs=1e-12)
+        assert r2.distance == pytest.approx(want, abs=1e-12)
+        assert r1.normal == pytest.approx([0.0, 1.0, 0.0], abs=1e-12)
+        assert r2.normal == pytest.approx([0.0, -1.0, 0.0], abs=1e-12)
+        assert r1.point_b == pytest.approx([1.0, -2.2 - margin, 0.5], abs=1e-12)
+        assert r1.touching == (want <= 0.0)
+        # the body-frame closed form, B's pose in A's frame
+        ca, pa, _ = shape_row(sphere)
+        cb, pb, _ = shape_row(plane)
+        r_ab = O.quat_matrix(np.array(pose_p[1]))
+        t_ab = np.array(pose_p[0]) - np.array(pose_s[0])
+        out = np.empty(12)
+        collide_analytic((ca, pa, 0, 0), (cb, pb, 0, 0), np.zeros((0, 3)), r_ab, t_ab, out)
+        assert out[OUT_DIST] == pytest.approx(want, abs=1e-12)
+
 def _scene(rng, n_shapes=40, n_pairs=300, types=O.TYPES):
     shapes = [O.random_shape(rng, types[i % len(types)]) for i in range(n_shapes)]
     from mkcollision_ros.shapes import build_table

@@ -403,9 +403,10 @@ def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
 
 @njit_inline
 def _plane_any(sa, sb, verts, r_ab, t_ab, out):
-    """A = any non-plane shape, B = half-space n.x <= d (B's frame)."""
+    """A = any non-plane shape, B = half-space n.x <= d (B's frame), grown by its
+    margin m to n.x <= d + m."""
     nb = sb[1]
-    d = sb[1][3]
+    d = sb[1][3] + sb[1][P_MARGIN]
     # plane normal in A's frame
     nax, nay, naz = _b_to_a(r_ab, nb[0], nb[1], nb[2])
     x0, x1, x2 = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], -nax, -nay, -naz)

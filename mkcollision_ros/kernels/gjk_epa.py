@@ -108,13 +108,15 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FAIL_GAP,
-                        EPA_KINK_CAP_CAPSULE, EPA_KINK_ITERS, EPA_KINK_NEAR, EPA_KINK_STEP, EPA_MAX_FACES, EPA_MAX_ITERS,
-                        EPA_POLISH_CAP, EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL,
-                        EPA_REL_TOL, EPA_WITNESS_SHIFT, GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS,
-                        GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA, OUT_DIST, OUT_ITERS, OUT_METHOD,
-                        OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE, ST_FAILED, ST_NOT_RUN,
-                        ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
+from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL,
+                        EPA_FAIL_GAP, EPA_KINK_CAP_CAPSULE, EPA_KINK_ITERS, EPA_KINK_NEAR,
+                        EPA_KINK_STEP, EPA_MAX_FACES, EPA_MAX_ITERS, EPA_POLISH_CAP,
+                        EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL, EPA_REL_TOL,
+                        EPA_WITNESS_SHIFT, GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS,
+                        GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA, OUT_DIST, OUT_ITERS,
+                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
+                        ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
+                        TOUCH_TOL)
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -927,9 +929,9 @@ def _searched_crease(code, other):
     """Whether _kink_polish searches the crease of a shape of this code paired with
     one of code ``other``: a cylinder's, against a _kink_partner; a capsule's, against
     a sphere or an ellipsoid (its core, a segment along z, has the same crease as a
-    cylinder's side and no other kink; the capsule's other pairs have closed forms,
-    but capsule-cylinder, whose cylinder's crease is searched without checking the
-    capsule's)."""
+    cylinder's side and no other kink).  Against a box, cone, hull or cylinder, the
+    other shape's creases and flat faces near the minimum are not ruled out, as for
+    _kink_partner."""
     return ((code == CYLINDER and _kink_partner(other))
             or (code == CAPSULE and (other == ELLIPSOID or other == SPHERE)))
 
@@ -946,9 +948,8 @@ def _axis_of(side, r_ab):
 def _kink_side(sa, sb, r_ab, dx, dy, dz):
     """Whose crease (a cylinder's side or a capsule's core, _searched_crease) the unit
     direction d is near: 0 for A's, 1 for B's (|d . axis| < EPA_KINK_NEAR), -1 for
-    neither or both
-    (near both, the minimum is likely where the two circles cross, on a flat face of
-    A - B that EPA resolves itself)."""
+    neither or both (near both, the minimum is likely where the two circles cross, on
+    a flat face of A - B that EPA resolves itself)."""
     ax, ay, az = _axis_of(0, r_ab)
     bx, by, bz = _axis_of(1, r_ab)
     na = _searched_crease(sa[0], sb[0]) and abs(ax * dx + ay * dy + az * dz) < EPA_KINK_NEAR
@@ -1066,24 +1067,23 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
     (a capsule's: its core segment, grown by the radius), so its support function has
     a crease there.  When the deepest direction lies on the crease (measured: 436 of
     939 deep cylinder-cylinder pairs, 571 of 963 deep ellipsoid-cylinder pairs), A - B
-    has a ruled strip there, curved across; EPA then
-    closes its bounds by a factor of ~2 per step (~30 steps against ~17 where the
-    minimum is on a flat face) and Newton's method in two dimensions gives up on the
-    crease.
+    has a ruled strip there, curved across; EPA then closes its bounds by a factor of
+    ~2 per step (~30 steps against ~17 where the minimum is on a flat face) and
+    Newton's method in two dimensions gives up on the crease.
 
     Kept only if h there is the lowest the search evaluated, the point h u lies on
     A - B's support segment (the cylinder's support point slid along its side by the
     axial part of w - h u stays within the side, within +-prm[1] along the axis for
-    both shapes: then h rises on both sides of the
-    crease), and, when the other shape is a cylinder too, nothing nearby is deeper:
-    the minimum along its crease (searched from d as well; the deeper of the two
-    converged minima is the candidate, and a search that gave up but went deeper
-    rejects it) and the point kinks of _kink_points.  Where two creases pass close
+    both shapes: then h rises on both sides of the crease), and, when the other shape
+    is a cylinder too, nothing nearby is deeper: the minimum along its crease
+    (searched from d as well; the deeper of the two converged minima is the candidate,
+    and a search that gave up but went deeper rejects it) and the point kinks of
+    _kink_points.  Where two creases pass close
     by, each has a minimum of its own (measured before this check: 4 of 40,000 deep
     random cylinder-cylinder and capsule-cylinder pairs whose kept minimum was up to
     4.3e-4 * scale shallower than the deepest direction, on the other crease 0.13-0.29
-    rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  The caller
-    then applies _polish_is_global as to Newton's method.  Results as
+    rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  The
+    caller then applies _polish_is_global as to Newton's method.  Results as
     _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
     A and B, the cylinder's one slid to that point); returns the number of support
     evaluations, negated when it gave up."""

@@ -240,7 +240,8 @@ def _rotate(q, x, y, z, inverse):
 @njit_inline
 def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, quat_p,
                       shape_is_a, out):
-    """A shape against a half-space (n . x <= d in the plane body's frame), straight in
+    """A shape against a half-space (n . x <= d + m in the plane body's frame, m its
+    margin, as in analytic._plane_any), straight in
     the world frame: the plane's normal n and offset go to the world, -n into the
     shape's frame for its support point p, and the signed distance is n . p - d.  The
     same closed form as analytic._plane_any, without the relative pose and the way
@@ -254,8 +255,10 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     sx, sy, sz = support_full_xyz(code_s, prm_s, verts, vr_s[0], vr_s[1], ux, uy, uz)
     sx, sy, sz = _rotate(quat_s, sx, sy, sz, False)
     # from the plane body's origin, not the world's (bodies far from the origin)
-    ex, ey, ez = sx + (pos_s[0] - pos_p[0]), sy + (pos_s[1] - pos_p[1]), sz + (pos_s[2] - pos_p[2])
-    dist = nx * ex + ny * ey + nz * ez - prm_p[3]
+    ex = sx + (pos_s[0] - pos_p[0])
+    ey = sy + (pos_s[1] - pos_p[1])
+    ez = sz + (pos_s[2] - pos_p[2])
+    dist = nx * ex + ny * ey + nz * ez - (prm_p[3] + prm_p[P_MARGIN])
     px, py, pz = pos_s[0] + sx, pos_s[1] + sy, pos_s[2] + sz
     qx, qy, qz = px - dist * nx, py - dist * ny, pz - dist * nz
     out[OUT_DIST] = dist

@@ -12,6 +12,7 @@ later run compares depth, normal and status with the reference.
     PYTHONPATH=. .venv/bin/python bench/deep_pairs.py --save [ROW ...]   # reference
     PYTHONPATH=. .venv/bin/python bench/deep_pairs.py [ROW ...]          # compare
     ... [--mpr] [--cases DIR]                                            # MPR instead
+    ... --apart      # the apart pairs whose bounding spheres overlap, not the deep ones
 
 Profile (numba keeps the object code only of what it compiles in the process, so the
 kernel cache must start empty; ``perf`` is a system tool, not a dependency):
@@ -43,7 +44,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from bench.common import KINDS, pair_cases, quat_to_matrix  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
 from mkcollision_ros.kernels import mpr as MP  # noqa: E402
-from mkcollision_ros.kernels.constants import OUT_ITERS, OUT_SIZE  # noqa: E402
+from mkcollision_ros.kernels.constants import OUT_ITERS, OUT_SIZE, ST_SEPARATED  # noqa: E402
 from mkcollision_ros.kernels.geometry import relative_pose  # noqa: E402
 from mkcollision_ros.kernels.jit import borrow  # noqa: E402
 
@@ -155,6 +156,8 @@ def main():
     ap.add_argument("--save", action="store_true", help="write the reference results")
     ap.add_argument("--mpr", action="store_true", help="time mpr_ws instead of gjk_epa_ws")
     ap.add_argument("--cases", default="/tmp/mkc_deep_pairs", help="folder of cases and references")
+    ap.add_argument("--apart", action="store_true",
+                    help="time the apart pairs that pass the bounding-sphere test instead")
     ap.add_argument("--profile", type=float, default=0.0, metavar="S",
                     help="loop the timed call S seconds, then write the symbol map")
     ap.add_argument("--report", metavar="IPS", help="map `perf script -F ip` output")
@@ -179,7 +182,14 @@ def main():
         if args.save:
             np.savez(ref_path, out=out, st=st)
         ref = np.load(ref_path)
-        deep = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)
+        if args.apart:
+            # apart, yet their bounding spheres (P_RADIUS = params[:, 7]) overlap: the
+            # pairs the batch kernel hands to GJK, which stops at the first separating
+            # support plane (cutoff 0)
+            gap = np.linalg.norm(tr, axis=1) - scale
+            deep = np.flatnonzero((ref["st"] == ST_SEPARATED) & (gap <= 0.0))
+        else:
+            deep = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)
         dargs = (table.codes, table.params, table.vrange, table.verts, pairs[deep], rot[deep],
                  tr[deep], np.zeros((len(deep), OUT_SIZE)), np.zeros(len(deep), np.int64),
                  ws, mbuf, args.mpr)
@@ -191,7 +201,8 @@ def main():
         ro = ref["out"]
         ang = 2.0 * np.arcsin(np.minimum(1.0, 0.5 * np.linalg.norm(out[deep, 1:4]
                                                                    - ro[deep, 1:4], axis=1)))
-        print(f"{row:20s} {tag} deep pairs {len(deep):4d}: {np.median(ts) * 1e6:6.3f} us, "
+        print(f"{row:20s} {tag} {'apart' if args.apart else 'deep'} pairs {len(deep):4d}: "
+              f"{np.median(ts) * 1e6:6.3f} us, "
               f"iterations {dargs[7][:, OUT_ITERS].mean():5.1f}; vs reference: status "
               f"{np.mean(st == ref['st']) * 100:5.1f}% same, depth max "
               f"{np.max(np.abs(out[:, 0] - ro[:, 0]) / scale):.1e} * scale, normal max "

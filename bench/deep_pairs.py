@@ -187,21 +187,21 @@ def main():
             # pairs the batch kernel hands to GJK, which stops at the first separating
             # support plane (cutoff 0)
             gap = np.linalg.norm(tr, axis=1) - scale
-            deep = np.flatnonzero((ref["st"] == ST_SEPARATED) & (gap <= 0.0))
+            sel = np.flatnonzero((ref["st"] == ST_SEPARATED) & (gap <= 0.0))
         else:
-            deep = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)
-        dargs = (table.codes, table.params, table.vrange, table.verts, pairs[deep], rot[deep],
-                 tr[deep], np.zeros((len(deep), OUT_SIZE)), np.zeros(len(deep), np.int64),
+            sel = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)
+        dargs = (table.codes, table.params, table.vrange, table.verts, pairs[sel], rot[sel],
+                 tr[sel], np.zeros((len(sel), OUT_SIZE)), np.zeros(len(sel), np.int64),
                  ws, mbuf, args.mpr)
         ts = []
         for _ in range(7):
             t0 = time.perf_counter()
             _run(*dargs, 3)
-            ts.append((time.perf_counter() - t0) / 3 / len(deep))
+            ts.append((time.perf_counter() - t0) / 3 / len(sel))
         ro = ref["out"]
-        ang = 2.0 * np.arcsin(np.minimum(1.0, 0.5 * np.linalg.norm(out[deep, 1:4]
-                                                                   - ro[deep, 1:4], axis=1)))
-        print(f"{row:20s} {tag} {'apart' if args.apart else 'deep'} pairs {len(deep):4d}: "
+        ang = 2.0 * np.arcsin(np.minimum(1.0, 0.5 * np.linalg.norm(out[sel, 1:4]
+                                                                   - ro[sel, 1:4], axis=1)))
+        print(f"{row:20s} {tag} {'apart' if args.apart else 'deep'} pairs {len(sel):4d}: "
               f"{np.median(ts) * 1e6:6.3f} us, "
               f"iterations {dargs[7][:, OUT_ITERS].mean():5.1f}; vs reference: status "
               f"{np.mean(st == ref['st']) * 100:5.1f}% same, depth max "

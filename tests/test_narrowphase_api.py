@@ -142,7 +142,6 @@ def test_plane_pairs():
     assert r1.normal == pytest.approx([0, 0, -1])   # from the box towards the half-space
 
 
-
 def test_plane_margin_grows_the_half_space():
     """A plane's margin m grows its half-space n.x <= d to n.x <= d + m, in the world
     frame path of collide and in the body-frame closed form alike (until session 12
@@ -174,6 +173,7 @@ def test_plane_margin_grows_the_half_space():
         out = np.empty(12)
         collide_analytic((ca, pa, 0, 0), (cb, pb, 0, 0), np.zeros((0, 3)), r_ab, t_ab, out)
         assert out[OUT_DIST] == pytest.approx(want, abs=1e-12)
+
 
 def _scene(rng, n_shapes=40, n_pairs=300, types=O.TYPES):
     shapes = [O.random_shape(rng, types[i % len(types)]) for i in range(n_shapes)]

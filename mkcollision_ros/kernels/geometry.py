@@ -34,19 +34,34 @@ from .jit import borrow, njit_inline, njit_kernel
 
 
 @njit_inline
+def quat_entries(q):
+    """The nine entries r00, r01, ..., r22 (row by row) of the rotation matrix of a unit
+    quaternion ``q`` = (x, y, z, w), as scalars: the one place of this formula."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    return (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+            2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+            2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y))
+
+
+@njit_inline
 def quat_to_matrix_into(q, r):
     """Write the rotation matrix of a unit quaternion ``q`` = (x, y, z, w) into ``r``
     (3, 3) float64 (allocation-free variant of ``quat_to_matrix``)."""
-    x, y, z, w = q[0], q[1], q[2], q[3]
-    r[0, 0] = 1.0 - 2.0 * (y * y + z * z)
-    r[0, 1] = 2.0 * (x * y - z * w)
-    r[0, 2] = 2.0 * (x * z + y * w)
-    r[1, 0] = 2.0 * (x * y + z * w)
-    r[1, 1] = 1.0 - 2.0 * (x * x + z * z)
-    r[1, 2] = 2.0 * (y * z - x * w)
-    r[2, 0] = 2.0 * (x * z - y * w)
-    r[2, 1] = 2.0 * (y * z + x * w)
-    r[2, 2] = 1.0 - 2.0 * (x * x + y * y)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_entries(q)
+    r[0, 0], r[0, 1], r[0, 2] = r00, r01, r02
+    r[1, 0], r[1, 1], r[1, 2] = r10, r11, r12
+    r[2, 0], r[2, 1], r[2, 2] = r20, r21, r22
+
+
+@njit_inline
+def quat_rotate_xyz(q, x, y, z, inverse):
+    """The vector (x, y, z) rotated by the unit quaternion ``q`` (by its inverse if
+    ``inverse``), with no matrix stored."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_entries(q)
+    if inverse:
+        r01, r10, r02, r20, r12, r21 = r10, r01, r20, r02, r21, r12
+    return (r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z,
+            r20 * x + r21 * y + r22 * z)
 
 
 @njit_kernel

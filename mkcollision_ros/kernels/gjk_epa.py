@@ -131,12 +131,13 @@ from .jit import borrow, njit_inline, njit_kernel
 #      face normals FN
 #   fv float64 (_FV_SIZE,): barycentric weights lam / lam_prev, l3, vol, the EPA result
 #      res (10), GJK's closest point v (3), face offsets FD
-#   iv uint64 (_IV_ROWS, 3): faces F, horizon edges (a, b, face beyond), flood-fill
-#      stack (col 0), alive flags (col 1), col 2 unused, then the new faces (col 0)
-#      and the free face slots (col 1) as lists, then the face adjacency ADJ (the face
-#      across edge e = F[f, e] -> F[f, (e + 1) % 3]), then per vertex u the horizon
-#      edge starting at u (col 0) and the one ending at u (col 1) of the current step,
-#      so each new face finds its neighbours across its two spokes in O(1).
+#   iv uint64 (_IV_ROWS, 3): faces F, horizon edges (a, b, face beyond as in ADJ),
+#      the flood-fill stack and the alive flags, the new faces and the free face
+#      slots, the face adjacency ADJ (4 g + eg: the face g across edge e = F[f, e] ->
+#      F[f, (e + 1) % 3], which is g's edge eg), then per vertex u the horizon edge
+#      starting at u and the one ending at u of the current step, so each new face
+#      finds its neighbours across its two spokes in O(1).  The six lists lie in
+#      _epa's flat view of iv (iv.reshape), two per block of rows, each contiguous.
 #      Unsigned because numba wraps negative indices (idx + len when idx < 0) only for
 #      signed integers: an index loaded from an int64 array costs three more
 #      instructions and the view's length kept in a register or spilled (measured:
@@ -1220,13 +1221,17 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     VD = fs[_VD:_VD + _NVMAX]
     FN, FD = fs[_FN:_FN + EPA_MAX_FACES], fv[_FD:_FD + EPA_MAX_FACES]
     F, edges = iv[_IF:_IF + EPA_MAX_FACES], iv[_IE:_IE + 3 * EPA_MAX_FACES]
-    stack = iv[_IS:_IS + EPA_MAX_FACES, 0]
-    alive = iv[_IS:_IS + EPA_MAX_FACES, 1]
-    newf = iv[_IC:_IC + EPA_MAX_FACES, 0]
-    free = iv[_IC:_IC + EPA_MAX_FACES, 1]
     ADJ = iv[_IA:_IA + EPA_MAX_FACES]
-    h_from = iv[_IH:_IH + _NVMAX, 0]
-    h_to = iv[_IH:_IH + _NVMAX, 1]
+    # the 1-D lists as contiguous runs of the flat buffer (a column view iv[:, c] is
+    # typed with a run-time stride: an index multiplication per access and more spilled
+    # registers)
+    ivf = iv.reshape(iv.size)
+    stack = ivf[3 * _IS:3 * _IS + EPA_MAX_FACES]
+    alive = ivf[3 * _IS + EPA_MAX_FACES:3 * _IS + 2 * EPA_MAX_FACES]
+    newf = ivf[3 * _IC:3 * _IC + EPA_MAX_FACES]
+    free = ivf[3 * _IC + EPA_MAX_FACES:3 * _IC + 2 * EPA_MAX_FACES]
+    h_from = ivf[3 * _IH:3 * _IH + _NVMAX]
+    h_to = ivf[3 * _IH + _NVMAX:3 * _IH + 2 * _NVMAX]
     cin = ws[0][_T3 + 12]
     for c in range(3):
         cin[c] = 0.0
@@ -1253,24 +1258,26 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     # (what the search below finds, at ~4% of a penetrating pair); a mixed layout (a
     # flat start) goes through the search, which rejects it.
     n_flip = int(F[0, 1] == 2) + int(F[1, 1] == 1) + int(F[2, 1] == 3) + int(F[3, 1] == 2)
+    # (entries 4 g + eg: face g across the edge, which is g's edge eg)
     if n_flip == 0:
-        ADJ[0, 0], ADJ[0, 1], ADJ[0, 2] = 1, 3, 2
-        ADJ[1, 0], ADJ[1, 1], ADJ[1, 2] = 2, 3, 0
-        ADJ[2, 0], ADJ[2, 1], ADJ[2, 2] = 0, 3, 1
-        ADJ[3, 0], ADJ[3, 1], ADJ[3, 2] = 1, 2, 0
+        ADJ[0, 0], ADJ[0, 1], ADJ[0, 2] = 6, 14, 8
+        ADJ[1, 0], ADJ[1, 1], ADJ[1, 2] = 10, 12, 0
+        ADJ[2, 0], ADJ[2, 1], ADJ[2, 2] = 2, 13, 4
+        ADJ[3, 0], ADJ[3, 1], ADJ[3, 2] = 5, 9, 1
     elif n_flip == 4:
-        ADJ[0, 0], ADJ[0, 1], ADJ[0, 2] = 2, 3, 1
-        ADJ[1, 0], ADJ[1, 1], ADJ[1, 2] = 0, 3, 2
-        ADJ[2, 0], ADJ[2, 1], ADJ[2, 2] = 1, 3, 0
-        ADJ[3, 0], ADJ[3, 1], ADJ[3, 2] = 0, 2, 1
+        ADJ[0, 0], ADJ[0, 1], ADJ[0, 2] = 10, 12, 4
+        ADJ[1, 0], ADJ[1, 1], ADJ[1, 2] = 2, 14, 8
+        ADJ[2, 0], ADJ[2, 1], ADJ[2, 2] = 6, 13, 0
+        ADJ[3, 0], ADJ[3, 1], ADJ[3, 2] = 1, 9, 5
     else:
         for f in range(4):
             for e in range(3):
                 a, b = F[f, e], F[f, (e + 1) % 3]
                 for g in range(4):
-                    if g != f and _edge_of(F, g, a, b) >= 0:
-                        ADJ[f, e] = g
-                        if F[g, (_edge_of(F, g, a, b) + 1) % 3] != a:
+                    eg = _edge_of(F, g, a, b)
+                    if g != f and eg >= 0:
+                        ADJ[f, e] = 4 * g + eg
+                        if F[g, (eg + 1) % 3] != a:
                             return 0, False, np.inf, False
     nfree = 0
     d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
@@ -1370,7 +1377,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             ns -= 1
             f = stack[ns]
             for e in range(3):
-                g = ADJ[f, e]
+                pg = ADJ[f, e]
+                g = pg >> np.uint64(2)
                 if not alive[g]:
                     continue            # seen in this step (or stale): interior edge
                 # height of w over g's plane, from its stored offset (a degenerate face
@@ -1387,11 +1395,12 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                     continue
                 edges[ne, 0] = F[f, e]
                 edges[ne, 1] = F[f, (e + 1) % 3]
-                edges[ne, 2] = g
+                edges[ne, 2] = pg
                 ne += 1
         # room for the new faces?
         if ne > nfree + (EPA_MAX_FACES - nf):
             break
+        nvu = np.uint64(nv)
         for c in range(3):
             V[nv, c] = w[c]
             VA[nv, c] = wa[c]
@@ -1419,27 +1428,34 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         if inward:
             for q in range(ne):
                 _face_setup(V, F, FN, FD, newf[q], cin)
-        # adjacency: across the horizon edge (a, b), the old face g; across the spoke
-        # (b, new vertex), the new face of the horizon edge starting at b; across
-        # (new vertex, a), the one of the edge ending at a (the horizon is a loop).
-        # Written from the face's known layout, (a, b, nv) as built or (a, nv, b) if
-        # _face_setup flipped it (O(1) each; a search over the horizon had cost, with
-        # the best-face scan, 5-13% of a penetrating pair's time, and the per-edge
-        # search this replaces ~3%)
+        # adjacency: across the horizon edge (a, b), the old face g (whose edge eg it
+        # is, stored with g); across the spoke (b, new vertex), the new face of the
+        # horizon edge starting at b; across (new vertex, a), the one of the edge
+        # ending at a (the horizon is a loop).  As built, every new face is (a, b, nv),
+        # so those spokes are its neighbours' edges 2 and 1 (O(1) each, no search: a
+        # search over the horizon had cost, with the best-face scan, 5-13% of a
+        # penetrating pair's time; the search of g's edge, ~9% of a deep box-cylinder
+        # pair's EPA, is gone with the twin index).  If _face_setup flipped some, the
+        # twins are looked up.
         for q in range(ne):
             f = newf[q]
-            a, b, g = edges[q, 0], edges[q, 1], edges[q, 2]
-            eg = _edge_of(F, g, a, b)
-            if eg >= 0:
-                ADJ[g, eg] = f
-            if F[f, 1] == b:
-                ADJ[f, 0] = g
-                ADJ[f, 1] = newf[h_from[b]]
-                ADJ[f, 2] = newf[h_to[a]]
-            else:
-                ADJ[f, 0] = newf[h_to[a]]
-                ADJ[f, 1] = newf[h_from[b]]
-                ADJ[f, 2] = g
+            a, b, pg = edges[q, 0], edges[q, 1], edges[q, 2]
+            g = pg >> np.uint64(2)
+            eg = pg & np.uint64(3)
+            if not inward:
+                ADJ[g, eg] = np.uint64(4) * f
+                ADJ[f, 0] = pg
+                ADJ[f, 1] = np.uint64(4) * newf[h_from[b]] + np.uint64(2)
+                ADJ[f, 2] = np.uint64(4) * newf[h_to[a]] + np.uint64(1)
+                continue
+            for e in range(3):
+                p, r = F[f, e], F[f, (e + 1) % 3]
+                if p != nvu and r != nvu:
+                    ADJ[g, eg] = np.uint64(4) * f + np.uint64(e)
+                    ADJ[f, e] = pg
+                else:
+                    nb = newf[h_from[b]] if (p == b or r == b) else newf[h_to[a]]
+                    ADJ[f, e] = np.uint64(4) * nb + np.uint64(max(_edge_of(F, nb, p, r), 0))
         nv += 1
     if best < 0:
         return it, False, np.inf, False

@@ -1274,8 +1274,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             for e in range(3):
                 a, b = F[f, e], F[f, (e + 1) % 3]
                 for g in range(4):
-                    eg = _edge_of(F, g, a, b)
-                    if g != f and eg >= 0:
+                    eg = _edge_of(F, g, a, b) if g != f else -1
+                    if eg >= 0:
                         ADJ[f, e] = 4 * g + eg
                         if F[g, (eg + 1) % 3] != a:
                             return 0, False, np.inf, False

@@ -228,8 +228,9 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     """A shape against a half-space (n . x <= d + m in the plane body's frame, m its
     margin), straight in the world frame: the plane's normal n goes to the world, -n
     into the shape's frame for its support point p, and the signed distance is n . p -
-    (d + m), p taken from the plane body's origin.  The same closed form as analytic._plane_any, without the relative pose and the way
-    back from A's frame (measured one thread, 500 pairs of bench/common.pair_cases,
+    (d + m), p taken from the plane body's origin.  The same closed form as
+    analytic._plane_any, without the relative pose and the way back from A's frame
+    (measured one thread, 500 pairs of bench/common.pair_cases,
     contacts mode: sphere-plane 0.068 -> 0.045 us per pair, ellipsoid-plane 0.076 ->
     0.053, convex-plane 0.086 -> 0.065; results within 7.4e-15 * scale).  Writes
     ``out`` (world; normal from A to B: -n when the shape is A, n when it is B; the

@@ -540,3 +540,74 @@ def test_sphere_ellipsoid_closed_form_against_gjk_epa():
     sa, _ = tup({"type": "sphere", "radius": 0.5})
     out = np.zeros(C.OUT_SIZE)
     assert collide_analytic(sa, sb_m, VERTS0, np.eye(3), np.array([0, 0, 4.0]), out) == C.ST_NOT_RUN
+
+
+SPHERE_WORLD = ["sphere", "box", "capsule", "cylinder", "cone", "ellipsoid"]
+
+
+@pytest.mark.parametrize("kind", SPHERE_WORLD)
+def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_forms(kind):
+    """The batch kernel (and the API) solves a sphere against a shape with a sphere-*
+    closed form in the other body's frame, straight from the world poses, for either
+    order of the pair (kernels/narrowphase._sphere_world); the body-frame kernels of
+    collide_analytic, fed the relative pose, are the reference: the same status, the
+    distance, normal and world witness points to round-off, the pair placed near the
+    origin or 1e3 m from it."""
+    import oracles as O
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    from mkcollision_ros.shapes import build_table
+    rng = np.random.default_rng(SPHERE_WORLD.index(kind) + 41)
+    n = 400
+    shapes = []
+    for k in range(n):
+        sphere = rand_shape(rng, "sphere")
+        other = rand_shape(rng, kind, 0.0 if kind == "ellipsoid" else 0.3)
+        shapes += [sphere, other] if k % 2 == 0 else [other, sphere]
+    table = build_table(shapes)
+    quat = O.random_quats(rng, 2 * n)
+    pos = np.zeros((2 * n, 3))
+    pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
+    pos[1::2] = pos[0::2] + 0.9 * rng.normal(size=(n, 3))
+    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
+    out = np.full((n, C.OUT_SIZE), np.nan)
+    st = np.full(n, -1, dtype=np.int64)
+    collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
+                  np.int64(C.M_AUTO), np.inf, out, st)
+    for k in range(n):
+        i, j = pairs[k]
+        ra, rb = O.quat_matrix(quat[i]), O.quat_matrix(quat[j])
+        st_b, ref = run(shapes[i], shapes[j], ra.T @ rb, ra.T @ (pos[j] - pos[i]))
+        scale = table.params[i, 7] + table.params[j, 7]
+        tol = 1e-12 * (scale + np.abs(pos[i]).max())
+        assert st[k] == st_b
+        assert out[k, C.OUT_DIST] == pytest.approx(ref[C.OUT_DIST], abs=1e-12 * scale)
+        np.testing.assert_allclose(out[k, C.OUT_NORMAL:C.OUT_NORMAL + 3],
+                                   ra @ ref[C.OUT_NORMAL:C.OUT_NORMAL + 3], atol=1e-12)
+        for c in (C.OUT_PA, C.OUT_PB):
+            np.testing.assert_allclose(out[k, c:c + 3], pos[i] + ra @ ref[c:c + 3], atol=tol)
+        assert out[k, C.OUT_METHOD] == C.M_ANALYTIC
+    hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
+    assert 0.2 < hits < 0.9
+
+
+def test_sphere_centred_on_a_capsule_axis_pushes_across_the_axis():
+    """A sphere centred on a capsule's segment: every direction normal to the segment is
+    as deep; the answer is the capsule's x axis, whichever shape is A and in the world
+    path as in the body frame."""
+    from mkcollision_ros import collide
+    sphere = {"type": "sphere", "radius": 0.3}
+    capsule = {"type": "capsule", "radius": 0.2, "length": 1.0}
+    s2 = math.sqrt(0.5)
+    q = [0.0, 0.0, s2, s2]                       # 90 degrees about z: x axis -> world +y
+    pose_c = ([1.0, 2.0, 3.0], q)
+    pose_s = ([1.0, 2.0, 3.25], [0.0, 0.0, 0.0, 1.0])   # on the segment, 0.25 up
+    r1 = collide(sphere, pose_s, capsule, pose_c)
+    r2 = collide(capsule, pose_c, sphere, pose_s)
+    for r, sign in ((r1, 1.0), (r2, -1.0)):
+        assert r.distance == pytest.approx(-0.5, abs=1e-12)
+        np.testing.assert_allclose(r.normal, [0.0, sign, 0.0], atol=1e-12)
+    st, out = run(sphere, capsule, np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0],
+                                             [0.0, 0.0, 1.0]]), np.array([0.0, 0.0, -0.25]))
+    assert out[C.OUT_DIST] == pytest.approx(-0.5, abs=1e-12)
+    np.testing.assert_allclose(out[C.OUT_NORMAL:C.OUT_NORMAL + 3], [0.0, 1.0, 0.0],
+                               atol=1e-12)

@@ -165,14 +165,11 @@ def _b_to_a(r_ab, x, y, z):
 
 
 @njit_kernel
-def _sphere_box(sa, sb, r_ab, t_ab, out):
-    """A = sphere (centre at A's origin), B = box (rounded by its margin)."""
-    ra = inflation(sa[0], sa[1])
-    rb = inflation(sb[0], sb[1])
-    prm = sb[1]
-    # sphere centre in B's frame: r_ab^T (0 - t_ab)
-    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
-    h0, h1, h2 = prm[0], prm[1], prm[2]
+def _point_box(h0, h1, h2, c0, c1, c2):
+    """A point c against the box core [-h, h] (the box's frame): the signed core
+    distance and the unit normal (n0, n1, n2) from the point towards the box (the
+    direction of A -> B when the point is A's sphere centre).  Inside, the nearest
+    face: the box must move along -sign(c_k) e_k to push that face past the point."""
     q0 = min(h0, max(-h0, c0))
     q1 = min(h1, max(-h1, c1))
     q2 = min(h2, max(-h2, c2))
@@ -180,67 +177,54 @@ def _sphere_box(sa, sb, r_ab, t_ab, out):
     if not inside:
         d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
         core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        n0, n1, n2 = d0 / core, d1 / core, d2 / core
-    else:
-        # nearest face: B must move along -sign(c_k) e_k to push that face past the centre
-        g0, g1, g2 = h0 - abs(c0), h1 - abs(c1), h2 - abs(c2)
-        n0, n1, n2 = 0.0, 0.0, 0.0
-        if g0 <= g1 and g0 <= g2:
-            core = -g0
-            s = 1.0 if c0 >= 0.0 else -1.0
-            n0 = -s
-            q0 = s * h0
-        elif g1 <= g2:
-            core = -g1
-            s = 1.0 if c1 >= 0.0 else -1.0
-            n1 = -s
-            q1 = s * h1
-        else:
-            core = -g2
-            s = 1.0 if c2 >= 0.0 else -1.0
-            n2 = -s
-            q2 = s * h2
-    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
-    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
+        return core, d0 / core, d1 / core, d2 / core
+    g0, g1, g2 = h0 - abs(c0), h1 - abs(c1), h2 - abs(c2)
+    if g0 <= g1 and g0 <= g2:
+        return -g0, -1.0 if c0 >= 0.0 else 1.0, 0.0, 0.0
+    if g1 <= g2:
+        return -g1, 0.0, -1.0 if c1 >= 0.0 else 1.0, 0.0
+    return -g2, 0.0, 0.0, -1.0 if c2 >= 0.0 else 1.0
 
 
 @njit_kernel
-def _sphere_cylinder(sa, sb, r_ab, t_ab, out):
-    """A = sphere (centre at A's origin), B = cylinder (radius R, half height h, axis z,
-    rounded by its margin).  The closest point of a solid of revolution to a point lies
-    in the point's meridian plane, so this is a point against the rectangle
-    [0, R] x [-h, h] in (rho, z); inside, the nearest of the side and the two caps."""
-    ra = inflation(sa[0], sa[1])
-    rb = inflation(sb[0], sb[1])
-    rr, h = sb[1][0], sb[1][1]
-    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
+def _point_cylinder(rr, h, c0, c1, c2):
+    """A point c against the cylinder core (radius rr, half height h, axis z, its
+    frame): signed core distance and unit normal from the point towards the cylinder.
+    The closest point of a solid of revolution to a point lies in the point's meridian
+    plane, so this is a point against the rectangle [0, rr] x [-h, h] in (rho, z);
+    inside, the nearest of the side and the two caps."""
     rho = math.sqrt(c0 * c0 + c1 * c1)
     if rho > 0.0:
         ux, uy = c0 / rho, c1 / rho
     else:
         ux, uy = 1.0, 0.0
     if rho <= rr and abs(c2) <= h:
-        # centre inside the core: the nearer of the side and the cap
         g_side = rr - rho
         g_cap = h - abs(c2)
         if g_side < g_cap:
-            core = -g_side
-            n0, n1, n2 = -ux, -uy, 0.0
-        else:
-            core = -g_cap
-            s = 1.0 if c2 >= 0.0 else -1.0
-            n0, n1, n2 = 0.0, 0.0, -s
+            return -g_side, -ux, -uy, 0.0
+        return -g_cap, 0.0, 0.0, -1.0 if c2 >= 0.0 else 1.0
+    if rho > rr:
+        q0, q1 = rr * ux, rr * uy
     else:
-        if rho > rr:
-            q0, q1 = rr * ux, rr * uy
-        else:
-            q0, q1 = c0, c1
-        q2 = min(h, max(-h, c2))
-        d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
-        core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        n0, n1, n2 = d0 / core, d1 / core, d2 / core
-    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
-    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
+        q0, q1 = c0, c1
+    q2 = min(h, max(-h, c2))
+    d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
+    core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return core, d0 / core, d1 / core, d2 / core
+
+
+@njit_inline
+def _point_capsule(h, c0, c1, c2):
+    """A point c against the capsule core, the segment z in [-h, h] (its frame): the
+    core distance and the unit normal from the point towards the segment; a point on
+    the segment gets distance 0 and the capsule's x axis (any direction normal to the
+    segment is as deep)."""
+    d2 = min(h, max(-h, c2)) - c2
+    core = math.sqrt(c0 * c0 + c1 * c1 + d2 * d2)
+    if core > 0.0:
+        return core, -c0 / core, -c1 / core, d2 / core
+    return 0.0, 1.0, 0.0, 0.0
 
 
 @njit_kernel
@@ -255,44 +239,35 @@ def _seg2_closest(px, pz, ax, az, bx, bz):
 
 
 @njit_kernel
-def _sphere_cone(sa, sb, r_ab, t_ab, out):
-    """A = sphere (centre at A's origin), B = cone (base radius R at z = -h, tip at
-    z = +h, rounded by its margin).  In the centre's meridian plane (rho, z) the cone is
-    the triangle tip (0, h), rim (R, -h), base centre (0, -h), whose surface edges are
-    the slant tip-rim and the base rim-centre (its right angle is at the base centre, so
-    an inside point's feet on both edge lines fall within the edges)."""
-    ra = inflation(sa[0], sa[1])
-    rb = inflation(sb[0], sb[1])
-    rr, h = sb[1][0], sb[1][1]
-    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
+def _point_cone(rr, h, c0, c1, c2):
+    """A point c against the cone core (base radius rr at z = -h, tip at z = +h, its
+    frame): signed core distance and unit normal from the point towards the cone.  In
+    the point's meridian plane (rho, z) the cone is the triangle tip (0, h), rim
+    (rr, -h), base centre (0, -h), whose surface edges are the slant tip-rim and the
+    base rim-centre (its right angle is at the base centre, so an inside point's feet
+    on both edge lines fall within the edges)."""
     rho = math.sqrt(c0 * c0 + c1 * c1)
     if rho > 0.0:
         ux, uy = c0 / rho, c1 / rho
     else:
         ux, uy = 1.0, 0.0
-    # outward unit normal of the slant in (rho, z): (2h, R) / L
+    # outward unit normal of the slant in (rho, z): (2h, rr) / L
     ln = math.sqrt(4.0 * h * h + rr * rr)
     sr, sz = 2.0 * h / ln, rr / ln
     g_slant = rho * sr + (c2 - h) * sz      # signed distance to the slant line
     g_base = -(c2 + h)                     # signed distance to the base plane
     if g_slant <= 0.0 and g_base <= 0.0:
-        # centre inside the core: B moves against the outward normal of the nearer face
+        # inside the core: the cone moves against the outward normal of the nearer face
         if g_slant >= g_base:
-            core = g_slant
-            n0, n1, n2 = -sr * ux, -sr * uy, -sz
-        else:
-            core = g_base
-            n0, n1, n2 = 0.0, 0.0, 1.0
-    else:
-        qr, qz = _seg2_closest(rho, c2, 0.0, h, rr, -h)
-        br, bz = _seg2_closest(rho, c2, rr, -h, 0.0, -h)
-        if (br - rho) ** 2 + (bz - c2) ** 2 < (qr - rho) ** 2 + (qz - c2) ** 2:
-            qr, qz = br, bz
-        d0, d1, d2 = qr * ux - c0, qr * uy - c1, qz - c2
-        core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        n0, n1, n2 = d0 / core, d1 / core, d2 / core
-    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
-    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
+            return g_slant, -sr * ux, -sr * uy, -sz
+        return g_base, 0.0, 0.0, 1.0
+    qr, qz = _seg2_closest(rho, c2, 0.0, h, rr, -h)
+    br, bz = _seg2_closest(rho, c2, rr, -h, 0.0, -h)
+    if (br - rho) ** 2 + (bz - c2) ** 2 < (qr - rho) ** 2 + (qz - c2) ** 2:
+        qr, qz = br, bz
+    d0, d1, d2 = qr * ux - c0, qr * uy - c1, qz - c2
+    core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    return core, d0 / core, d1 / core, d2 / core
 
 
 @njit_kernel
@@ -305,12 +280,11 @@ def _ellipsoid_newton_f(y0, y1, y2, e0, e1, e2, g0, g1, g2, u):
 
 
 @njit_kernel
-def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
-    """A = sphere (centre = A's origin), B = ellipsoid without margin (module docstring)."""
-    ra = inflation(sa[0], sa[1])
-    e0, e1, e2 = sb[1][0], sb[1][1], sb[1][2]
-    # sphere centre in B's frame, folded into the positive octant
-    p0, p1, p2 = _origin_in_b(r_ab, t_ab)
+def _point_ellipsoid(e0, e1, e2, p0, p1, p2):
+    """A point p against the ellipsoid x_i^2 / e_i^2 = 1 (its frame, no margin; module
+    docstring): the signed distance to its surface and the unit normal from the point
+    towards the ellipsoid (minus the outward surface normal at the nearest point)."""
+    # the point folded into the positive octant
     y0, y1, y2 = abs(p0), abs(p1), abs(p2)
     em = min(e0, min(e1, e2))
     m = 0 if e0 == em else (1 if e1 == em else 2)
@@ -396,9 +370,40 @@ def _sphere_ellipsoid(sa, sb, r_ab, t_ab, out):
     # outward surface normal at x (B's frame); the normal A -> B is its opposite
     nx, ny, nz = x0 / (e0 * e0), x1 / (e1 * e1), x2 / (e2 * e2)
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    nx, ny, nz = -nx / nn, -ny / nn, -nz / nn
-    wx, wy, wz = _b_to_a(r_ab, nx, ny, nz)
-    return _finish_s(0.0, 0.0, 0.0, d if outside else -d, wx, wy, wz, ra, 0.0, out)
+    return d if outside else -d, -nx / nn, -ny / nn, -nz / nn
+
+
+@njit_inline
+def point_to_shape(code, prm, c0, c1, c2):
+    """A sphere's centre c, given in the frame of a box, capsule, cylinder, cone or
+    ellipsoid without margin (the sphere-* closed forms), against that shape: returns
+    (d, n0, n1, n2, r), the signed distance from the sphere's centre to the shape being
+    d - r - (the sphere's radius), and n the unit normal from the sphere towards the
+    shape in the shape's frame.  r is the shape's inflation (0 for the ellipsoid, whose
+    d is measured to its surface, not to a core)."""
+    if code == BOX:
+        d, n0, n1, n2 = _point_box(prm[0], prm[1], prm[2], c0, c1, c2)
+    elif code == CYLINDER:
+        d, n0, n1, n2 = _point_cylinder(prm[0], prm[1], c0, c1, c2)
+    elif code == CONE:
+        d, n0, n1, n2 = _point_cone(prm[0], prm[1], c0, c1, c2)
+    elif code == CAPSULE:
+        d, n0, n1, n2 = _point_capsule(prm[1], c0, c1, c2)
+    else:
+        d, n0, n1, n2 = _point_ellipsoid(prm[0], prm[1], prm[2], c0, c1, c2)
+        return d, n0, n1, n2, 0.0
+    return d, n0, n1, n2, inflation(code, prm)
+
+
+@njit_kernel
+def _sphere_closed_form(sa, sb, r_ab, t_ab, out):
+    """A = sphere (centre at A's origin), B = a shape of point_to_shape: its closed
+    form in B's frame, the normal brought back to A's frame."""
+    ra = inflation(sa[0], sa[1])
+    c0, c1, c2 = _origin_in_b(r_ab, t_ab)
+    core, n0, n1, n2, rb = point_to_shape(sb[0], sb[1], c0, c1, c2)
+    nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
+    return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
 
 @njit_inline
@@ -442,23 +447,9 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
     rb = inflation(cb, sb[1])
     if ca == SPHERE and cb == SPHERE:
         return True, _point_point_s(0.0, 0.0, 0.0, t_ab[0], t_ab[1], t_ab[2], ra, rb, out)
-    if ca == SPHERE and cb == BOX:
-        return True, _sphere_box(sa, sb, r_ab, t_ab, out)
-    if ca == SPHERE and cb == CYLINDER:
-        return True, _sphere_cylinder(sa, sb, r_ab, t_ab, out)
-    if ca == SPHERE and cb == CONE:
-        return True, _sphere_cone(sa, sb, r_ab, t_ab, out)
-    if ca == SPHERE and cb == ELLIPSOID and sb[1][P_MARGIN] == 0.0:
-        return True, _sphere_ellipsoid(sa, sb, r_ab, t_ab, out)
-    if ca == SPHERE and cb == CAPSULE:
-        hb = sb[1][1]
-        px, py, pz = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
-        qx, qy, qz = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
-        cx, cy, cz = _closest_on_segment_s(0.0, 0.0, 0.0, px, py, pz, qx, qy, qz)
-        if cx * cx + cy * cy + cz * cz > 0.0:
-            return True, _point_point_s(0.0, 0.0, 0.0, cx, cy, cz, ra, rb, out)
-        nx, ny, nz = _any_perp_s(r_ab[0, 2], r_ab[1, 2], r_ab[2, 2])
-        return True, _finish_s(0.0, 0.0, 0.0, 0.0, nx, ny, nz, ra, rb, out)
+    if ca == SPHERE and (cb == BOX or cb == CAPSULE or cb == CYLINDER or cb == CONE
+                         or (cb == ELLIPSOID and sb[1][P_MARGIN] == 0.0)):
+        return True, _sphere_closed_form(sa, sb, r_ab, t_ab, out)
     if ca == CAPSULE and cb == CAPSULE:
         return True, _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out)
     if ca == BOX and cb == CAPSULE:

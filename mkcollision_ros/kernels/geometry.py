@@ -165,7 +165,25 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
 @njit_inline
 def support_full_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     """Support point (x, y, z) (body frame) of the whole shape along (dx, dy, dz): core
-    plus inflation.  Allocation-free variant of ``support_full``."""
+    plus inflation.  Allocation-free variant of ``support_full``.
+
+    An ellipsoid's core is the ellipsoid less its rolling radius along the direction,
+    which the inflation adds back, so its full support is the ellipsoid's own support
+    point plus the margin: computed so (two divisions and a square root fewer, and no
+    rolling radius taken off and put back in floating point)."""
+    if code == ELLIPSOID:
+        a, b, c, m = prm[0], prm[1], prm[2], prm[P_MARGIN]
+        ex, ey, ez = a * a * dx, b * b * dy, c * c * dz
+        n = math.sqrt(ex * dx + ey * dy + ez * dz)
+        if not n > 0.0:
+            return a + m, 0.0, 0.0
+        x, y, z = ex / n, ey / n, ez / n
+        if m > 0.0:
+            s = m / math.sqrt(dx * dx + dy * dy + dz * dz)
+            x += s * dx
+            y += s * dy
+            z += s * dz
+        return x, y, z
     x, y, z = support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz)
     rad = inflation(code, prm)
     if rad > 0.0:

@@ -542,6 +542,37 @@ def test_sphere_ellipsoid_closed_form_against_gjk_epa():
     assert collide_analytic(sa, sb_m, VERTS0, np.eye(3), np.array([0, 0, 4.0]), out) == C.ST_NOT_RUN
 
 
+def _world_against_body_frame(shapes, pos, quat, normal_atol, point_tol):
+    """collide_batch (method auto) on the pairs (2k, 2k + 1) against collide_analytic
+    fed each pair's relative pose: the same status and method, the distance within
+    1e-12 * scale, the world normal within ``normal_atol`` and the world witness points
+    within ``point_tol`` * (scale + |A's position|).  Returns the statuses."""
+    import oracles as O
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    from mkcollision_ros.shapes import build_table
+    table = build_table(shapes)
+    n = len(shapes) // 2
+    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
+    out = np.full((n, C.OUT_SIZE), np.nan)
+    st = np.full(n, -1, dtype=np.int64)
+    collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
+                  np.int64(C.M_AUTO), np.inf, out, st)
+    for k in range(n):
+        i, j = pairs[k]
+        ra, rb = O.quat_matrix(quat[i]), O.quat_matrix(quat[j])
+        st_b, ref = run(shapes[i], shapes[j], ra.T @ rb, ra.T @ (pos[j] - pos[i]))
+        scale = table.params[i, 7] + table.params[j, 7]
+        assert st[k] == st_b
+        assert out[k, C.OUT_DIST] == pytest.approx(ref[C.OUT_DIST], abs=1e-12 * scale)
+        np.testing.assert_allclose(out[k, C.OUT_NORMAL:C.OUT_NORMAL + 3],
+                                   ra @ ref[C.OUT_NORMAL:C.OUT_NORMAL + 3], atol=normal_atol)
+        for c in (C.OUT_PA, C.OUT_PB):
+            np.testing.assert_allclose(out[k, c:c + 3], pos[i] + ra @ ref[c:c + 3],
+                                       atol=point_tol * (scale + np.abs(pos[i]).max()))
+        assert out[k, C.OUT_METHOD] == C.M_ANALYTIC
+    return st
+
+
 SPHERE_WORLD = ["sphere", "box", "capsule", "cylinder", "cone", "ellipsoid"]
 
 
@@ -554,8 +585,6 @@ def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_form
     distance, normal and world witness points to round-off, the pair placed near the
     origin or 1e3 m from it."""
     import oracles as O
-    from mkcollision_ros.kernels.narrowphase import collide_batch
-    from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(SPHERE_WORLD.index(kind) + 41)
     n = 400
     shapes = []
@@ -563,29 +592,11 @@ def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_form
         sphere = rand_shape(rng, "sphere")
         other = rand_shape(rng, kind, 0.0 if kind == "ellipsoid" else 0.3)
         shapes += [sphere, other] if k % 2 == 0 else [other, sphere]
-    table = build_table(shapes)
     quat = O.random_quats(rng, 2 * n)
     pos = np.zeros((2 * n, 3))
     pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
     pos[1::2] = pos[0::2] + 0.9 * rng.normal(size=(n, 3))
-    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
-    out = np.full((n, C.OUT_SIZE), np.nan)
-    st = np.full(n, -1, dtype=np.int64)
-    collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
-                  np.int64(C.M_AUTO), np.inf, out, st)
-    for k in range(n):
-        i, j = pairs[k]
-        ra, rb = O.quat_matrix(quat[i]), O.quat_matrix(quat[j])
-        st_b, ref = run(shapes[i], shapes[j], ra.T @ rb, ra.T @ (pos[j] - pos[i]))
-        scale = table.params[i, 7] + table.params[j, 7]
-        tol = 1e-12 * (scale + np.abs(pos[i]).max())
-        assert st[k] == st_b
-        assert out[k, C.OUT_DIST] == pytest.approx(ref[C.OUT_DIST], abs=1e-12 * scale)
-        np.testing.assert_allclose(out[k, C.OUT_NORMAL:C.OUT_NORMAL + 3],
-                                   ra @ ref[C.OUT_NORMAL:C.OUT_NORMAL + 3], atol=1e-12)
-        for c in (C.OUT_PA, C.OUT_PB):
-            np.testing.assert_allclose(out[k, c:c + 3], pos[i] + ra @ ref[c:c + 3], atol=tol)
-        assert out[k, C.OUT_METHOD] == C.M_ANALYTIC
+    st = _world_against_body_frame(shapes, pos, quat, 1e-12, 1e-12)
     hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
     assert 0.2 < hits < 0.9
 
@@ -611,3 +622,24 @@ def test_sphere_centred_on_a_capsule_axis_pushes_across_the_axis():
     assert out[C.OUT_DIST] == pytest.approx(-0.5, abs=1e-12)
     np.testing.assert_allclose(out[C.OUT_NORMAL:C.OUT_NORMAL + 3], [0.0, 1.0, 0.0],
                                atol=1e-12)
+
+
+def test_batch_capsule_pairs_solved_in_the_world_match_the_body_frame_closed_form():
+    """Two capsules are solved straight from their world poses
+    (analytic.capsule_capsule_world, the same segment kernel as the body-frame path);
+    collide_analytic on the relative pose is the reference, to round-off, on random
+    pairs, parallel axes (the overlap's middle) and axes crossing at the centres (the
+    common perpendicular)."""
+    import oracles as O
+    rng = np.random.default_rng(53)
+    n = 600
+    shapes = [rand_shape(rng, "capsule") for _ in range(2 * n)]
+    quat = O.random_quats(rng, 2 * n)
+    pos = np.zeros((2 * n, 3))
+    pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
+    pos[1::2] = pos[0::2] + 1.2 * rng.normal(size=(n, 3))
+    quat[3:200:4] = quat[2:200:4]                                   # parallel axes
+    pos[201:400:4] = pos[200:400:4]                                 # coincident centres
+    st = _world_against_body_frame(shapes, pos, quat, 1e-9, 1e-9)
+    hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
+    assert 0.2 < hits < 0.9

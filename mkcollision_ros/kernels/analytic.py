@@ -58,7 +58,7 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, 
                         P_MARGIN, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, meet, shape_scale, support_full_xyz
+from .geometry import inflation, meet, quat_entries, shape_scale, support_full_xyz
 from .jit import njit_inline, njit_kernel
 
 
@@ -128,23 +128,6 @@ def _closest_on_segment_s(px, py, pz, ax, ay, az, bx, by, bz):
     s = ((px - ax) * ex + (py - ay) * ey + (pz - az) * ez) / den
     s = min(1.0, max(0.0, s))
     return ax + s * ex, ay + s * ey, az + s * ez
-
-
-@njit_kernel
-def _any_perp_s(vx, vy, vz):
-    """A unit vector perpendicular to v (or +z when v is zero), as a tuple."""
-    ax, ay, az = abs(vx), abs(vy), abs(vz)
-    if ax == 0.0 and ay == 0.0 and az == 0.0:
-        return 0.0, 0.0, 1.0
-    # cross with the least aligned axis
-    if ax <= ay and ax <= az:
-        cx, cy, cz = 0.0, vz, -vy
-    elif ay <= az:
-        cx, cy, cz = -vz, 0.0, vx
-    else:
-        cx, cy, cz = vy, -vx, 0.0
-    cn = math.sqrt(cx * cx + cy * cy + cz * cz)
-    return cx / cn, cy / cn, cz / cn
 
 
 @njit_inline
@@ -458,18 +441,16 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
 
 
 @njit_kernel
-def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
-    """Two capsules: closest points of the axis segments (Ericson 5.1.9), scalars."""
-    ha = sa[1][1]
-    hb = sb[1][1]
-    p1x, p1y, p1z = 0.0, 0.0, ha
-    p2x, p2y, p2z = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
-    q2x, q2y, q2z = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
-    # d1 = q1 - p1 = (0, 0, -2 ha), d2 = q2 - p2, r = p1 - p2
-    d1x, d1y, d1z = 0.0, 0.0, -2.0 * ha
-    d2x, d2y, d2z = q2x - p2x, q2y - p2y, q2z - p2z
+def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty, tz,
+              fx, fy, fz, ra, rb, tiny, out):
+    """Two capsules as the segments [p1, p1 + d1] and [p2, q2] grown by ra and rb, in
+    any frame: closest points of the segments (Ericson 5.1.9), scalars; ``out`` in that
+    frame.  Axes that cross (closest points within ``tiny``) separate along the common
+    perpendicular, oriented along t (A's centre to B's) when that is defined, else
+    along the unit f (a direction normal to A's axis)."""
     rx, ry, rz = p1x - p2x, p1y - p2y, p1z - p2z
-    a = d1z * d1z
+    d2x, d2y, d2z = q2x - p2x, q2y - p2y, q2z - p2z
+    a = d1x * d1x + d1y * d1y + d1z * d1z
     e = d2x * d2x + d2y * d2y + d2z * d2z
     f = d2x * rx + d2y * ry + d2z * rz
     if a <= 0.0 and e <= 0.0:
@@ -481,11 +462,11 @@ def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
         den = 0.0
     elif e <= 0.0:
         t = 0.0
-        s = min(1.0, max(0.0, -(d1z * rz) / a))
+        s = min(1.0, max(0.0, -(d1x * rx + d1y * ry + d1z * rz) / a))
         den = 0.0
     else:
-        c = d1z * rz
-        b = d1z * d2z
+        c = d1x * rx + d1y * ry + d1z * rz
+        b = d1x * d2x + d1y * d2y + d1z * d2z
         den = a * e - b * b
         # den = |d1|^2 |d2|^2 sin^2: treat as parallel below a relative threshold
         if den > 1e-14 * a * e:
@@ -515,7 +496,7 @@ def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
                                                   q2x, q2y, q2z)
     dx, dy, dz = c2x - c1x, c2y - c1y, c2z - c1z
     dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-    if dn > 1e-15 * shape_scale(sa, sb):
+    if dn > tiny:
         return _point_point_s(c1x, c1y, c1z, c2x, c2y, c2z, ra, rb, out)
     # crossing axes: separate along the common perpendicular d1 x d2
     nx = d1y * d2z - d1z * d2y
@@ -526,12 +507,46 @@ def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
         nx /= nn
         ny /= nn
         nz /= nn
-        # orient from A's centre towards B's centre when that is defined
-        if nx * t_ab[0] + ny * t_ab[1] + nz * t_ab[2] < 0.0:
+        if nx * tx + ny * ty + nz * tz < 0.0:
             nx, ny, nz = -nx, -ny, -nz
     else:
-        nx, ny, nz = _any_perp_s(0.0, 0.0, 1.0)
+        nx, ny, nz = fx, fy, fz
     return _finish_s(c1x, c1y, c1z, 0.0, nx, ny, nz, ra, rb, out)
+
+
+@njit_kernel
+def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
+    """Two capsules in A's frame (A's segment on its z axis): _segments."""
+    ha = sa[1][1]
+    hb = sb[1][1]
+    p2x, p2y, p2z = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
+    q2x, q2y, q2z = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
+    return _segments(0.0, 0.0, ha, 0.0, 0.0, -2.0 * ha, p2x, p2y, p2z, q2x, q2y, q2z,
+                     t_ab[0], t_ab[1], t_ab[2], 0.0, 1.0, 0.0, ra, rb,
+                     1e-15 * shape_scale(sa, sb), out)
+
+
+@njit_inline
+def capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale, out):
+    """Two capsules straight from their world poses (the same _segments as the
+    body-frame path, on the axes taken from the quaternions, coordinates relative to
+    A's centre): no rotation matrices, relative pose or way back from A's frame.  The
+    fallback normal of fully degenerate crossings is A's y axis, as in A's frame.
+    Writes ``out`` (world) and returns the signed distance (m)."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_entries(quat_a)
+    s00, s01, s02, s10, s11, s12, s20, s21, s22 = quat_entries(quat_b)
+    ha, hb = prm_a[1], prm_b[1]
+    tx, ty, tz = pos_b[0] - pos_a[0], pos_b[1] - pos_a[1], pos_b[2] - pos_a[2]
+    p2x, p2y, p2z = tx + hb * s02, ty + hb * s12, tz + hb * s22
+    q2x, q2y, q2z = tx - hb * s02, ty - hb * s12, tz - hb * s22
+    dist = _segments(ha * r02, ha * r12, ha * r22, -2.0 * ha * r02, -2.0 * ha * r12,
+                     -2.0 * ha * r22, p2x, p2y, p2z, q2x, q2y, q2z,
+                     tx, ty, tz, r01, r11, r21, prm_a[0] + prm_a[P_MARGIN],
+                     prm_b[0] + prm_b[P_MARGIN], 1e-15 * scale, out)
+    for c in range(3):
+        out[OUT_PA + c] += pos_a[c]
+        out[OUT_PB + c] += pos_a[c]
+    return dist
 
 
 @njit_inline

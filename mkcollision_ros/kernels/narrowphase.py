@@ -27,8 +27,8 @@ import math
 
 import numpy as np
 
-from .analytic import (box_box_sat, classify, closed_form_ordered, collide_analytic,
-                       point_to_shape)
+from .analytic import (box_box_sat, capsule_capsule_world, classify, closed_form_ordered,
+                       collide_analytic, point_to_shape)
 from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_AUTO,
                         M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED, M_GJK_EPA, M_MPR, NP_CHUNK,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
@@ -346,11 +346,12 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     with that gap as the certified distance bound (the same pre-test as MuJoCo's),
     normal along the centre line, pa and pb on the two spheres.  A shape against a
     half-space, by method auto or analytic, is solved in the world frame
-    (_half_space_world), and so is a sphere against a shape with a sphere-* closed form
-    (_sphere_world; measured one thread, 2,000 pairs of bench/common.pair_cases,
-    contacts mode, alternated with the path through the relative pose: sphere-box 0.044
-    -> 0.021 us per pair, sphere-cylinder 0.049 -> 0.025-0.038, sphere-ellipsoid 0.166
-    -> 0.144, sphere-sphere 0.029 -> 0.015)."""
+    (_half_space_world), and so are a sphere against a shape with a sphere-* closed
+    form (_sphere_world) and two capsules (analytic.capsule_capsule_world): measured one
+    thread, 2,000 pairs of bench/common.pair_cases, contacts mode, alternated with the
+    path through the relative pose (bench/ab_rows.py): sphere-box 0.044 -> 0.021 us per
+    pair, sphere-cylinder 0.049 -> 0.025-0.038, sphere-ellipsoid 0.166 -> 0.144,
+    sphere-sphere 0.029 -> 0.015, capsule-capsule 0.061-0.090 -> 0.041-0.060."""
     if code_a != PLANE and code_b != PLANE:
         dx, dy, dz = pos_b[0] - pos_a[0], pos_b[1] - pos_a[1], pos_b[2] - pos_a[2]
         dc = math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -380,6 +381,10 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
         if code_b == SPHERE and _has_closed_form(SPHERE, code_a, prm_a):
             dist = _sphere_world(prm_b, code_a, prm_a, pos_b, pos_a, quat_a, False, out)
             return classify(dist, scale)
+    if (method == M_AUTO or method == M_ANALYTIC) and code_a == CAPSULE and code_b == CAPSULE:
+        scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]), (code_b, prm_b, vr_b[0], vr_b[1]))
+        return classify(capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale,
+                                              out), scale)
     ra = ws[0][0:3]
     rb = ws[0][3:6]
     quat_to_matrix_into(quat_a, ra)

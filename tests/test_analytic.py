@@ -643,3 +643,29 @@ def test_batch_capsule_pairs_solved_in_the_world_match_the_body_frame_closed_for
     st = _world_against_body_frame(shapes, pos, quat, 1e-9, 1e-9)
     hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
     assert 0.2 < hits < 0.9
+
+
+@pytest.mark.parametrize("la,lb", [(0.8, 0.5), (0.0, 0.5), (0.8, 0.0)])
+def test_capsules_whose_axes_meet_in_a_line_or_a_point_separate_across_them(la, lb):
+    """Coaxial capsules with coincident centres (the common perpendicular of parallel
+    axes is round-off, so it must not be used) and a zero-length capsule centred on the
+    other's segment: every direction normal to the segment is as deep, so the normal
+    is normal to it and the depth is the sum of the radii, in either order, for both
+    the world-frame path and the body frame."""
+    import oracles as O
+    from mkcollision_ros import collide
+    rng = np.random.default_rng(61)
+    a = {"type": "capsule", "radius": 0.3, "length": la}
+    b = {"type": "capsule", "radius": 0.2, "length": lb}
+    for _ in range(20):
+        q = O.random_quats(rng, 1)[0]
+        qa = q if la > 0.0 and lb > 0.0 else O.random_quats(rng, 1)[0]
+        axis = O.quat_matrix(q if lb > 0.0 else qa)[:, 2]
+        c = rng.uniform(-5.0, 5.0, 3)
+        for r in (collide(a, (c, qa), b, (c, q)), collide(b, (c, q), a, (c, qa))):
+            assert r.depth == pytest.approx(0.5, abs=1e-12)
+            assert abs(np.dot(r.normal, axis)) < 1e-12
+        ra = O.quat_matrix(qa)
+        st, out = run(a, b, ra.T @ O.quat_matrix(q), np.zeros(3))
+        assert out[C.OUT_DIST] == pytest.approx(-0.5, abs=1e-12)
+        assert abs(np.dot(ra @ out[C.OUT_NORMAL:C.OUT_NORMAL + 3], axis)) < 1e-12

@@ -442,12 +442,13 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
 
 @njit_kernel
 def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty, tz,
-              fx, fy, fz, ra, rb, tiny, out):
+              fx, fy, fz, gx, gy, gz, ra, rb, tiny, out):
     """Two capsules as the segments [p1, p1 + d1] and [p2, q2] grown by ra and rb, in
     any frame: closest points of the segments (Ericson 5.1.9), scalars; ``out`` in that
-    frame.  Axes that cross (closest points within ``tiny``) separate along the common
-    perpendicular, oriented along t (A's centre to B's) when that is defined, else
-    along the unit f (a direction normal to A's axis)."""
+    frame.  Axes that meet (closest points within ``tiny``) separate along the common
+    perpendicular when they cross, oriented along t (A's centre to B's) when that is
+    defined; parallel ones along f, A's y axis (unit, normal to A's axis); a point on
+    a segment along f or A's x axis g made normal to the segment."""
     rx, ry, rz = p1x - p2x, p1y - p2y, p1z - p2z
     d2x, d2y, d2z = q2x - p2x, q2y - p2y, q2z - p2z
     a = d1x * d1x + d1y * d1y + d1z * d1z
@@ -498,19 +499,32 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
     dn = math.sqrt(dx * dx + dy * dy + dz * dz)
     if dn > tiny:
         return _point_point_s(c1x, c1y, c1z, c2x, c2y, c2z, ra, rb, out)
-    # crossing axes: separate along the common perpendicular d1 x d2
-    nx = d1y * d2z - d1z * d2y
-    ny = d1z * d2x - d1x * d2z
-    nz = d1x * d2y - d1y * d2x
-    nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-    if nn > 0.0:
-        nx /= nn
-        ny /= nn
-        nz /= nn
+    if den > 1e-14 * a * e:
+        # crossing axes: separate along the common perpendicular d1 x d2 (|d1 x d2|^2
+        # = den, well away from zero here)
+        nx = d1y * d2z - d1z * d2y
+        ny = d1z * d2x - d1x * d2z
+        nz = d1x * d2y - d1y * d2x
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / nn, ny / nn, nz / nn
         if nx * tx + ny * ty + nz * tz < 0.0:
             nx, ny, nz = -nx, -ny, -nz
-    else:
+    elif a > 0.0 or not e > 0.0:
+        # parallel axes through one point (or two points): every direction normal to
+        # A's axis is as deep; f is one.  (Not the cross product: for parallel axes it
+        # is round-off, and its direction anything.)
         nx, ny, nz = fx, fy, fz
+    else:
+        # A's segment a point on B's: a direction normal to B's axis, f or g (unit,
+        # normal to f) made normal to it, whichever keeps more of its length (>= 0.7)
+        k = (fx * d2x + fy * d2y + fz * d2z) / e
+        nx, ny, nz = fx - k * d2x, fy - k * d2y, fz - k * d2z
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        if nn < 0.7:
+            k = (gx * d2x + gy * d2y + gz * d2z) / e
+            nx, ny, nz = gx - k * d2x, gy - k * d2y, gz - k * d2z
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / nn, ny / nn, nz / nn
     return _finish_s(c1x, c1y, c1z, 0.0, nx, ny, nz, ra, rb, out)
 
 
@@ -522,7 +536,7 @@ def _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
     p2x, p2y, p2z = t_ab[0] + hb * r_ab[0, 2], t_ab[1] + hb * r_ab[1, 2], t_ab[2] + hb * r_ab[2, 2]
     q2x, q2y, q2z = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
     return _segments(0.0, 0.0, ha, 0.0, 0.0, -2.0 * ha, p2x, p2y, p2z, q2x, q2y, q2z,
-                     t_ab[0], t_ab[1], t_ab[2], 0.0, 1.0, 0.0, ra, rb,
+                     t_ab[0], t_ab[1], t_ab[2], 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, ra, rb,
                      1e-15 * shape_scale(sa, sb), out)
 
 
@@ -531,7 +545,7 @@ def capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale, out
     """Two capsules straight from their world poses (the same _segments as the
     body-frame path, on the axes taken from the quaternions, coordinates relative to
     A's centre): no rotation matrices, relative pose or way back from A's frame.  The
-    fallback normal of fully degenerate crossings is A's y axis, as in A's frame.
+    normals of axes that meet are chosen from A's y and x axes, as in A's frame.
     Writes ``out`` (world) and returns the signed distance (m)."""
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_entries(quat_a)
     s00, s01, s02, s10, s11, s12, s20, s21, s22 = quat_entries(quat_b)
@@ -541,7 +555,7 @@ def capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale, out
     q2x, q2y, q2z = tx - hb * s02, ty - hb * s12, tz - hb * s22
     dist = _segments(ha * r02, ha * r12, ha * r22, -2.0 * ha * r02, -2.0 * ha * r12,
                      -2.0 * ha * r22, p2x, p2y, p2z, q2x, q2y, q2z,
-                     tx, ty, tz, r01, r11, r21, prm_a[0] + prm_a[P_MARGIN],
+                     tx, ty, tz, r01, r11, r21, r00, r10, r20, prm_a[0] + prm_a[P_MARGIN],
                      prm_b[0] + prm_b[P_MARGIN], 1e-15 * scale, out)
     for c in range(3):
         out[OUT_PA + c] += pos_a[c]

@@ -58,7 +58,8 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, 
                         P_MARGIN, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import inflation, meet, quat_entries, shape_scale, support_full_xyz
+from .geometry import (inflation, meet, quat_entries, quat_rotate_xyz, shape_scale,
+                       support_full_xyz)
 from .jit import njit_inline, njit_kernel
 
 
@@ -357,9 +358,19 @@ def _point_ellipsoid(e0, e1, e2, p0, p1, p2):
 
 
 @njit_inline
-def point_to_shape(code, prm, c0, c1, c2):
-    """A sphere's centre c, given in the frame of a box, capsule, cylinder, cone or
-    ellipsoid without margin (the sphere-* closed forms), against that shape: returns
+def has_point_form(code, prm):
+    """Whether _point_to_shape solves a point against a shape of this code and these
+    parameters: a box, capsule, cylinder, cone or an ellipsoid without margin (an
+    ellipsoid grown by a margin is no ellipsoid).  With a sphere on the other side,
+    these are the sphere-* closed forms of _ordered and of sphere_world."""
+    return (code == BOX or code == CAPSULE or code == CYLINDER or code == CONE
+            or (code == ELLIPSOID and prm[P_MARGIN] == 0.0))
+
+
+@njit_inline
+def _point_to_shape(code, prm, c0, c1, c2):
+    """A sphere's centre c, given in the frame of a shape of has_point_form, against
+    that shape: returns
     (d, n0, n1, n2, r), the signed distance from the sphere's centre to the shape being
     d - r - (the sphere's radius), and n the unit normal from the sphere towards the
     shape in the shape's frame.  r is the shape's inflation (0 for the ellipsoid, whose
@@ -380,11 +391,11 @@ def point_to_shape(code, prm, c0, c1, c2):
 
 @njit_kernel
 def _sphere_closed_form(sa, sb, r_ab, t_ab, out):
-    """A = sphere (centre at A's origin), B = a shape of point_to_shape: its closed
+    """A = sphere (centre at A's origin), B = a shape of has_point_form: its closed
     form in B's frame, the normal brought back to A's frame."""
     ra = inflation(sa[0], sa[1])
     c0, c1, c2 = _origin_in_b(r_ab, t_ab)
-    core, n0, n1, n2, rb = point_to_shape(sb[0], sb[1], c0, c1, c2)
+    core, n0, n1, n2, rb = _point_to_shape(sb[0], sb[1], c0, c1, c2)
     nx, ny, nz = _b_to_a(r_ab, n0, n1, n2)
     return _finish_s(0.0, 0.0, 0.0, core, nx, ny, nz, ra, rb, out)
 
@@ -430,8 +441,7 @@ def _ordered(sa, sb, verts, r_ab, t_ab, out):
     rb = inflation(cb, sb[1])
     if ca == SPHERE and cb == SPHERE:
         return True, _point_point_s(0.0, 0.0, 0.0, t_ab[0], t_ab[1], t_ab[2], ra, rb, out)
-    if ca == SPHERE and (cb == BOX or cb == CAPSULE or cb == CYLINDER or cb == CONE
-                         or (cb == ELLIPSOID and sb[1][P_MARGIN] == 0.0)):
+    if ca == SPHERE and has_point_form(cb, sb[1]):
         return True, _sphere_closed_form(sa, sb, r_ab, t_ab, out)
     if ca == CAPSULE and cb == CAPSULE:
         return True, _capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out)
@@ -561,6 +571,38 @@ def capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale, out
         out[OUT_PA + c] += pos_a[c]
         out[OUT_PB + c] += pos_a[c]
     return dist
+
+
+@njit_inline
+def sphere_world(prm_s, code_o, prm_o, pos_s, pos_o, quat_o, sphere_is_a, out):
+    """A sphere against a sphere or a shape of has_point_form, in the world frame: the
+    sphere's centre goes into the other body's frame (one rotation), the closed form
+    runs there, its normal comes back (one rotation); the sphere's own orientation is
+    never needed.  The same closed forms as _ordered, without the two rotation
+    matrices, the relative pose and the way back from A's frame, and for either order
+    of the pair (``sphere_is_a``: the sphere is A).  Two spheres: the centre line in
+    the world frame (+z when the centres coincide).  Writes ``out`` (world; normal from
+    A to B) and returns the signed distance (m)."""
+    rs = prm_s[0] + prm_s[P_MARGIN]
+    if code_o == SPHERE:
+        dx, dy, dz = pos_o[0] - pos_s[0], pos_o[1] - pos_s[1], pos_o[2] - pos_s[2]
+        core = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if core > 0.0:
+            nx, ny, nz = dx / core, dy / core, dz / core
+        else:
+            nx, ny, nz = 0.0, 0.0, 1.0
+        ro = prm_o[0] + prm_o[P_MARGIN]
+    else:
+        c0, c1, c2 = quat_rotate_xyz(quat_o, pos_s[0] - pos_o[0], pos_s[1] - pos_o[1],
+                                     pos_s[2] - pos_o[2], True)
+        core, n0, n1, n2, ro = _point_to_shape(code_o, prm_o, c0, c1, c2)
+        nx, ny, nz = quat_rotate_xyz(quat_o, n0, n1, n2, False)
+    if sphere_is_a:
+        return _finish_s(pos_s[0], pos_s[1], pos_s[2], core, nx, ny, nz, rs, ro, out)
+    # the other shape is A: its core witness is the sphere's centre moved by the core
+    # distance along n, and the normal from A to B is -n
+    return _finish_s(pos_s[0] + core * nx, pos_s[1] + core * ny, pos_s[2] + core * nz,
+                     core, -nx, -ny, -nz, ro, rs, out)
 
 
 @njit_inline

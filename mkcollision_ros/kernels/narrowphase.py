@@ -28,12 +28,11 @@ import math
 import numpy as np
 
 from .analytic import (box_box_sat, capsule_capsule_world, classify, closed_form_ordered,
-                       collide_analytic, point_to_shape)
-from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, M_ANALYTIC, M_AUTO,
-                        M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED, M_GJK_EPA, M_MPR, NP_CHUNK,
-                        OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
-                        OUT_SIZE, P_MARGIN, P_RADIUS, PLANE, SPHERE, ST_NOT_RUN,
-                        ST_SEPARATED, TOUCH_TOL)
+                       collide_analytic, has_point_form, sphere_world)
+from .constants import (BOX, CAPSULE, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT,
+                        M_ELLIPSOID_SAMPLED, M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS,
+                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, P_MARGIN, P_RADIUS,
+                        PLANE, SPHERE, ST_NOT_RUN, ST_SEPARATED, TOUCH_TOL)
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import (borrow_args, quat_entries, quat_rotate_xyz, quat_to_matrix_into,
                        shape_scale, support_full_xyz)
@@ -76,8 +75,7 @@ def _has_closed_form(code_a, code_b, prm_b):
     if code_b == PLANE:
         return code_a != PLANE
     if code_a == SPHERE:
-        return (code_b == SPHERE or code_b == BOX or code_b == CAPSULE or code_b == CYLINDER
-                or code_b == CONE or (code_b == ELLIPSOID and prm_b[P_MARGIN] == 0.0))
+        return code_b == SPHERE or has_point_form(code_b, prm_b)
     return code_b == CAPSULE and (code_a == CAPSULE or code_a == BOX)
 
 
@@ -275,48 +273,6 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     return dist
 
 
-@njit_inline
-def _sphere_world(prm_s, code_o, prm_o, pos_s, pos_o, quat_o, sphere_is_a, out):
-    """A sphere against a shape with a sphere-* closed form (analytic.point_to_shape),
-    in the world frame: the sphere's centre goes into the other body's frame (one
-    rotation), the closed form runs there, its normal comes back (one rotation); the
-    sphere's own orientation is never needed.  The same closed forms as
-    analytic._ordered, without the two rotation matrices, the relative pose and the way
-    back from A's frame, and for either order of the pair (a sphere as B took the
-    swapped path of collide_pair_ws).  Two spheres: the centre line in the world frame
-    (+z when the centres coincide).  Writes ``out`` (world; normal from A to B) and
-    returns the signed distance (m)."""
-    rs = prm_s[0] + prm_s[P_MARGIN]
-    if code_o == SPHERE:
-        dx, dy, dz = pos_o[0] - pos_s[0], pos_o[1] - pos_s[1], pos_o[2] - pos_s[2]
-        core = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if core > 0.0:
-            nx, ny, nz = dx / core, dy / core, dz / core
-        else:
-            nx, ny, nz = 0.0, 0.0, 1.0
-        ro = prm_o[0] + prm_o[P_MARGIN]
-    else:
-        c0, c1, c2 = quat_rotate_xyz(quat_o, pos_s[0] - pos_o[0], pos_s[1] - pos_o[1],
-                                     pos_s[2] - pos_o[2], True)
-        core, n0, n1, n2, ro = point_to_shape(code_o, prm_o, c0, c1, c2)
-        nx, ny, nz = quat_rotate_xyz(quat_o, n0, n1, n2, False)
-    dist = core - rs - ro
-    px, py, pz = pos_s[0] + rs * nx, pos_s[1] + rs * ny, pos_s[2] + rs * nz
-    qx, qy, qz = px + dist * nx, py + dist * ny, pz + dist * nz
-    out[OUT_DIST] = dist
-    if sphere_is_a:
-        out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = nx, ny, nz
-        out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = px, py, pz
-        out[OUT_PB], out[OUT_PB + 1], out[OUT_PB + 2] = qx, qy, qz
-    else:
-        out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2] = -nx, -ny, -nz
-        out[OUT_PA], out[OUT_PA + 1], out[OUT_PA + 2] = qx, qy, qz
-        out[OUT_PB], out[OUT_PB + 1], out[OUT_PB + 2] = px, py, pz
-    out[OUT_ITERS] = 1.0
-    out[OUT_METHOD] = M_ANALYTIC
-    return dist
-
-
 @njit_kernel
 def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
                   pos_b, quat_b, method, out):
@@ -347,7 +303,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     normal along the centre line, pa and pb on the two spheres.  A shape against a
     half-space, by method auto or analytic, is solved in the world frame
     (_half_space_world), and so are a sphere against a shape with a sphere-* closed
-    form (_sphere_world) and two capsules (analytic.capsule_capsule_world): measured one
+    form (analytic.sphere_world) and two capsules (analytic.capsule_capsule_world): measured one
     thread, 2,000 pairs of bench/common.pair_cases, contacts mode, alternated with the
     path through the relative pose (bench/ab_rows.py): sphere-box 0.044 -> 0.021 us per
     pair, sphere-cylinder 0.049 -> 0.025-0.038, sphere-ellipsoid 0.166 -> 0.144,
@@ -364,27 +320,29 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
                 out[OUT_PA + i] = pos_a[i] + prm_a[P_RADIUS] * out[OUT_NORMAL + i]
                 out[OUT_PB + i] = pos_b[i] - prm_b[P_RADIUS] * out[OUT_NORMAL + i]
             return ST_SEPARATED
-    if (method == M_AUTO or method == M_ANALYTIC) and (code_a == PLANE) != (code_b == PLANE):
-        if code_b == PLANE:
-            dist = _half_space_world(code_a, prm_a, vr_a, verts, pos_a, quat_a, prm_b, pos_b,
-                                     quat_b, True, out)
-        else:
-            dist = _half_space_world(code_b, prm_b, vr_b, verts, pos_b, quat_b, prm_a, pos_a,
-                                     quat_a, False, out)
-        return classify(dist, shape_scale((code_a, prm_a, vr_a[0], vr_a[1]),
-                                          (code_b, prm_b, vr_b[0], vr_b[1])))
-    if (method == M_AUTO or method == M_ANALYTIC) and (code_a == SPHERE or code_b == SPHERE):
-        scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]), (code_b, prm_b, vr_b[0], vr_b[1]))
-        if code_a == SPHERE and _has_closed_form(SPHERE, code_b, prm_b):
-            dist = _sphere_world(prm_a, code_b, prm_b, pos_a, pos_b, quat_b, True, out)
+    if method == M_AUTO or method == M_ANALYTIC:
+        # the pairs solved in the world frame, by the kind of closed form
+        half_space = (code_a == PLANE) != (code_b == PLANE)
+        sphere_a = code_a == SPHERE and _has_closed_form(SPHERE, code_b, prm_b)
+        sphere_b = code_b == SPHERE and _has_closed_form(SPHERE, code_a, prm_a)
+        capsules = code_a == CAPSULE and code_b == CAPSULE
+        if half_space or sphere_a or sphere_b or capsules:
+            scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]),
+                                (code_b, prm_b, vr_b[0], vr_b[1]))
+            if half_space and code_b == PLANE:
+                dist = _half_space_world(code_a, prm_a, vr_a, verts, pos_a, quat_a, prm_b,
+                                         pos_b, quat_b, True, out)
+            elif half_space:
+                dist = _half_space_world(code_b, prm_b, vr_b, verts, pos_b, quat_b, prm_a,
+                                         pos_a, quat_a, False, out)
+            elif sphere_a:
+                dist = sphere_world(prm_a, code_b, prm_b, pos_a, pos_b, quat_b, True, out)
+            elif sphere_b:
+                dist = sphere_world(prm_b, code_a, prm_a, pos_b, pos_a, quat_a, False, out)
+            else:
+                dist = capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b,
+                                             scale, out)
             return classify(dist, scale)
-        if code_b == SPHERE and _has_closed_form(SPHERE, code_a, prm_a):
-            dist = _sphere_world(prm_b, code_a, prm_a, pos_b, pos_a, quat_a, False, out)
-            return classify(dist, scale)
-    if (method == M_AUTO or method == M_ANALYTIC) and code_a == CAPSULE and code_b == CAPSULE:
-        scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]), (code_b, prm_b, vr_b[0], vr_b[1]))
-        return classify(capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale,
-                                              out), scale)
     ra = ws[0][0:3]
     rb = ws[0][3:6]
     quat_to_matrix_into(quat_a, ra)

@@ -58,7 +58,9 @@ adopted in session 11, before it searched both cylinders' creases, kept B's crea
 minimum 0.19 rad from the deepest direction on A's),
 mkc_crease_polish_wrong_basin_ellipsoid_capsule (the same search on a capsule's crease,
 session 12, under the 0.5 rad basin cap, kept a minimum 0.19 rad from a deeper one off
-the crease), mkc_coincident_coaxial_cylinders
+the crease), mkc_crease_polish_wrong_basin_ellipsoid_box (the same on a box's edges,
+session 15: a minimum 0.20 rad from a deeper one in a vertex's region),
+mkc_coincident_coaxial_cylinders
 (two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
 reported FAILED and dropped by the pipeline), mkc_coincident_coaxial_capsules (the
 world-frame capsule pair of session 14 took the round-off cross product of two

@@ -73,9 +73,10 @@ EPA_KINK_ITERS = 8         # its support evaluations
 EPA_KINK_STEP = 0.1        # longest step it may take along the side's circle (rad)
 EPA_KINK_CAP_CAPSULE = 0.05  # EPA_POLISH_CAP for a minimum on a capsule's crease (rad):
                            # deeper minima off it were found 0.09-0.19 rad away
-EPA_KINK_CAP_BOX = 0.05    # and on a box edge's crease against an ellipsoid: at 0.5 rad,
+EPA_KINK_CAP_BOX = 0.1     # and on a box edge's crease against an ellipsoid: at 0.5 rad,
                            # 1 of 100,000 random pairs kept a minimum 3e-4 * scale too
-                           # shallow, a deeper one in a vertex's region 0.2 rad away
+                           # deep, the true one in a vertex's region 0.2 rad away (none
+                           # at 0.1 or 0.05; 0.1 takes 18.1 steps, 0.05 18.8)
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

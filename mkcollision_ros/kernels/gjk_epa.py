@@ -53,16 +53,16 @@ Phases of ``gjk_epa``
      normal, and its minimum kept only if no direction outside a cap of
      EPA_POLISH_CAP around its normal can be deeper by EPA's faces (_polish_is_global:
      another basin could be deeper; regression scene
-     mkc_epa_polish_wrong_basin_ellipsoid_cone).  With a cylinder (and the other shape
-     a cylinder, sphere or ellipsoid, _kink_partner) or a capsule (and the other shape
-     a sphere or an ellipsoid; _searched_crease) or a box (against a sphere or an
-     ellipsoid), when the best face's normal is near the crease of the cylinder's
+     mkc_epa_polish_wrong_basin_ellipsoid_cone).  With a cylinder (and the other
+     shape a cylinder, capsule, sphere or ellipsoid, _kink_partner) or a capsule (and
+     the other shape a sphere or an ellipsoid; _searched_crease) or a box (against a
+     sphere or an ellipsoid), when the best face's normal is near the crease of the cylinder's
      side, the capsule's core (the great circle normal to its axis) or one of the
      box's edge directions, the minimum along that crease is searched instead
      (_kink_polish, secant steps on h's derivative along the circle), with the checks
      across the crease and, between two cylinders, against the other crease and the
-     point kinks nearby, and the same cap test (a capsule's or a box's crease under a
-     cap of 0.05 rad, EPA_KINK_CAP_CAPSULE and EPA_KINK_CAP_BOX: regression scenes
+     point kinks nearby, and the same cap test (with a capsule, a cap of 0.05 rad,
+     EPA_KINK_CAP_CAPSULE; on a box's crease 0.1 rad, EPA_KINK_CAP_BOX: regression scenes
      mkc_crease_polish_wrong_basin_ellipsoid_capsule and _ellipsoid_box): deep
      cylinder-cylinder pairs 5.2 -> 3.9 us,
      ellipsoid-cylinder 6.2 -> 4.4, ellipsoid-capsule 3.6 -> 3.4 (bench/deep_pairs.py;
@@ -941,12 +941,13 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
 @njit_inline
 def _kink_partner(code):
     """Whether _kink_polish may run against a shape of this code: a cylinder (whose
-    crease and point kinks it searches too) or one with no kinks (sphere and
-    ellipsoid cores).  Boxes, cones, convex hulls and capsule cores put creases and
-    flat faces near the minimum that it does not rule out (box-cylinder and
-    cylinder-convex pairs gained nothing when it ran there, capsule-cylinder pairs
-    lost 2% with their creases searched as well)."""
-    return code == CYLINDER or code == ELLIPSOID or code == SPHERE
+    crease and point kinks it searches too), one with no kinks (sphere and ellipsoid
+    cores) or a capsule's core (its crease is left to EPA where the two creases cross,
+    _kink_side, and the basin cap is EPA_KINK_CAP_CAPSULE: deep capsule-cylinder pairs
+    17.0 -> 16.5 steps).  Boxes, cones and convex hulls put creases and flat faces near
+    the minimum that it does not rule out (box-cylinder and cylinder-convex pairs
+    gained nothing when it ran there)."""
+    return code == CYLINDER or code == ELLIPSOID or code == SPHERE or code == CAPSULE
 
 
 @njit_inline
@@ -988,22 +989,25 @@ def _kink_side(sa, sb, r_ab, dx, dy, dz, apart):
     _searched_crease allows for EPA or, ``apart`` (GJK on cores apart, where h is
     convex and a minimum on a crease is the global one whatever the other shape), all
     of them.  Returns 3 side + axis (side 0 for A's crease, 1 for B's), -1 when near
-    none, -2 when near two or more: where two creases cross (two cylinders' circles, a
-    box's face normal) the minimum is likely on a flat face of A - B, which EPA and
-    GJK resolve themselves."""
+    none, -2 when near two or more, searched or not: where two creases cross (two
+    cylinders' circles, a capsule's and a cylinder's, a box's face normal) the minimum
+    is likely on a flat face of A - B, which EPA and GJK resolve themselves (deep
+    capsule-cylinder pairs there: 13.9 steps by EPA alone, 25.2 with the search along
+    the cylinder's crease).  Near one crease that is not searched: -1."""
     found = -1
     for side in range(2):
         code = sa[0] if side == 0 else sb[0]
-        if not (_has_crease(code) if apart
-                else _searched_crease(code, sb[0] if side == 0 else sa[0])):
+        if not _has_crease(code):
             continue
+        searched = apart or _searched_crease(code, sb[0] if side == 0 else sa[0])
         for axis in range(0 if code == BOX else 2, 3):
             kx, ky, kz = _axis_of(side, axis, r_ab)
             if abs(kx * dx + ky * dy + kz * dz) < EPA_KINK_NEAR:
                 if found != -1:
                     return -2
-                found = 3 * side + axis
-    return found
+                # near a crease EPA does not search: -2 if near another as well
+                found = 3 * side + axis if searched else -3
+    return -1 if found == -3 else found
 
 
 @njit_kernel
@@ -1161,8 +1165,8 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     4.3e-4 * scale shallower than the deepest direction, on the other crease 0.13-0.29
     rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  EPA
     then applies _polish_is_global as to Newton's method; GJK on cores apart needs no
-    such test (h is convex there: a minimum on the sphere below zero is the global one).  Results as
-    _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
+    such test (h is convex there: a minimum on the sphere below zero is the global
+    one).  Results as _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
     A and B, the cylinder's one slid to that point); returns the number of support
     evaluations, negated when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)

@@ -36,8 +36,10 @@ Phases of ``gjk_epa``
      capsule's core or a box's edges, _kink_side) the minimum along the crease is
      searched instead (_kink_polish, as in EPA below): apart, h is convex and any
      local minimum below zero is the global one.  bench/deep_pairs.py, deep pairs
-     (many have an ellipsoid's cores apart): ellipsoid-box 2.94 -> 2.33 us,
-     ellipsoid-capsule 2.42 -> 1.87, ellipsoid-cylinder 3.21 -> 2.80.
+     (many have an ellipsoid's cores apart): ellipsoid-box 2.94 -> 2.40 us (with
+     EPA's search along the box's creases), ellipsoid-capsule 2.42 -> 1.87,
+     ellipsoid-cylinder 3.21 -> 2.80, capsule-cylinder 2.71 -> 2.20 (with EPA's search
+     along the cylinder's).
   2. When the cores overlap (origin inside the GJK tetrahedron, or |v| <=
      EPA_DEGEN_TOL * scale), EPA on the *cores*: the full difference is the core one
      grown by a ball of radius r_a + r_b, so depth = core depth + r_a + r_b exactly.
@@ -56,9 +58,9 @@ Phases of ``gjk_epa``
      mkc_epa_polish_wrong_basin_ellipsoid_cone).  With a cylinder (and the other
      shape a cylinder, capsule, sphere or ellipsoid, _kink_partner) or a capsule (and
      the other shape a sphere or an ellipsoid; _searched_crease) or a box (against a
-     sphere or an ellipsoid), when the best face's normal is near the crease of the cylinder's
-     side, the capsule's core (the great circle normal to its axis) or one of the
-     box's edge directions, the minimum along that crease is searched instead
+     sphere or an ellipsoid), when the best face's normal is near the crease of the
+     cylinder's side, the capsule's core (the great circle normal to its axis) or one
+     of the box's edge directions, the minimum along that crease is searched instead
      (_kink_polish, secant steps on h's derivative along the circle), with the checks
      across the crease and, between two cylinders, against the other crease and the
      point kinks nearby, and the same cap test (with a capsule, a cap of 0.05 rad,

@@ -69,7 +69,15 @@ Phases of ``gjk_epa``
      cylinder-cylinder pairs 5.2 -> 3.9 us,
      ellipsoid-cylinder 6.2 -> 4.4, ellipsoid-capsule 3.6 -> 3.4 (bench/deep_pairs.py;
      no depth on 100,000 deep random pairs per row off EPA's own by more than 1.2e-8 *
-     scale).
+     scale).  Between a box or a cylinder and a sphere or an ellipsoid, when the best
+     face's normal is near a box's face normal or a cylinder's axis, one support point
+     there tells whether that normal is a minimum (_face_polish: the other shape's
+     point projects into the face), from a gain of EPA_FACE_TOL * scale, with a cap of
+     EPA_FACE_CAP (regression scene mkc_face_polish_wrong_basin_ellipsoid_cylinder).
+     A minimum whose cap test fails stays a candidate and is tested again at every
+     later step as the polytope grows (until then EPA went on to the next try, 100x
+     closer, ~10 steps later): it is taken as soon as the test passes, or dropped when
+     EPA finds a direction deeper by more than the tolerance.
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
@@ -121,8 +129,9 @@ import math
 import numpy as np
 
 from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL,
-                        EPA_FAIL_GAP, EPA_KINK_CAP_BOX, EPA_KINK_CAP_CAPSULE,
-                        EPA_KINK_ITERS, EPA_KINK_NEAR, EPA_KINK_STEP,
+                        EPA_FACE_CAP, EPA_FACE_EVALS, EPA_FACE_TOL, EPA_FAIL_GAP,
+                        EPA_KINK_CAP_BOX, EPA_KINK_CAP_CAPSULE, EPA_KINK_ITERS,
+                        EPA_KINK_NEAR, EPA_KINK_STEP,
                         EPA_MAX_FACES, EPA_MAX_ITERS, EPA_POLISH_CAP,
                         EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL, EPA_REL_TOL,
                         EPA_WITNESS_SHIFT, GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS,
@@ -1275,6 +1284,110 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap):
 
 
 @njit_inline
+def _face_pair(ca, cb):
+    """Whether EPA tries _face_polish on this pair of shape codes: a box or a cylinder
+    against a sphere or an ellipsoid (cores without kinks, so the face's own first-order
+    test below decides whether its normal is a minimum)."""
+    faced = ca == BOX or ca == CYLINDER or cb == BOX or cb == CYLINDER
+    round_ = ca == SPHERE or ca == ELLIPSOID or cb == SPHERE or cb == ELLIPSOID
+    return faced and round_
+
+
+@njit_kernel
+def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
+    """Whether the minimum of h = h_{A-B} is exactly at the normal of a box's face or a
+    cylinder's cap near the unit direction d (EPA's best face normal, within
+    EPA_KINK_NEAR rad of it), for a _face_pair.
+
+    Why: the deepest direction of an ellipsoid against a box lies on a face normal of
+    the box in about half of the deep random pairs (measured: 511 of 960), and on a
+    cylinder's axis in some (51 of 400 deep ellipsoid-cylinder pairs).  There h has a
+    point kink (the box's support is a whole face, a cylinder's the whole cap) and A - B
+    a flat face, but the other shape's curvature leaves EPA's vertices near that face
+    slightly off it, and EPA takes ~11 steps to close its bounds.  The test needs one
+    support point: at the face normal f, h rises to first order in every direction iff
+    the other shape's support point projects into the face (for a tangent t, the face
+    adds max over the face of t . x, the other shape's point subtracts t . p): inside
+    the face's rectangle, or the cap's disc, by 1e-7 * scale.  Then f is a local minimum
+    and the support point with its projection onto the face are the witnesses.
+
+    Results as _newton_min_support's (ws t3 rows 15-18: direction, difference point,
+    witnesses on A and B); returns 1 (the support evaluated) when f is a minimum, -1
+    when the point projects outside the face, 0 when d is near no face normal.  EPA
+    then applies _polish_is_global with the plane test under a cap of EPA_FACE_CAP
+    (another local minimum may lie close by: at 0.5 rad, a minimum on a cylinder's axis
+    was kept 0.31 rad from a deeper one, 9e-4 * scale below it, in 1 of 100,000 random
+    ellipsoid-cylinder pairs; regression scene
+    mkc_face_polish_wrong_basin_ellipsoid_cylinder)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = borrow_gjk_workspace(ws)
+    fs = ws[0]
+    for side in range(2):
+        code = sa[0] if side == 0 else sb[0]
+        if code != BOX and code != CYLINDER:
+            continue
+        # the face's outward normal is d on A, -d on B
+        sg = 1.0 if side == 0 else -1.0
+        cbest = 0.0
+        k = 0
+        for axis in range(0 if code == BOX else 2, 3):
+            kx, ky, kz = _axis_of(side, axis, r_ab)
+            c = sg * (kx * dx + ky * dy + kz * dz)
+            if abs(c) > abs(cbest):
+                cbest = c
+                k = axis
+        if not cbest * cbest > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
+            return 0
+        kx, ky, kz = _axis_of(side, k, r_ab)
+        s = sg * (1.0 if cbest > 0.0 else -1.0)
+        nx, ny, nz = s * kx, s * ky, s * kz
+        pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab,
+                                                       nx, ny, nz, core)
+        h = nx * (pax - pbx) + ny * (pay - pby) + nz * (paz - pbz)
+        # the other shape's point in the face shape's frame
+        if side == 0:
+            qx, qy, qz = pbx, pby, pbz
+        else:
+            ox, oy, oz = pax - t_ab[0], pay - t_ab[1], paz - t_ab[2]
+            qx = r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz
+            qy = r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz
+            qz = r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz
+        prm = sa[1] if side == 0 else sb[1]
+        eps = 1e-7 * scale
+        if code == BOX:
+            inside = ((k == 0 or abs(qx) <= prm[0] - eps)
+                      and (k == 1 or abs(qy) <= prm[1] - eps)
+                      and (k == 2 or abs(qz) <= prm[2] - eps))
+        else:
+            inside = prm[0] > eps and qx * qx + qy * qy <= (prm[0] - eps) ** 2
+        if not inside:
+            return -1
+        pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+        pd[0], pd[1], pd[2] = nx, ny, nz
+        pw[0], pw[1], pw[2] = h * nx, h * ny, h * nz
+        # the witness on the face: the other's point moved onto the face's plane
+        if side == 0:
+            pwa[0], pwa[1], pwa[2] = pbx + h * nx, pby + h * ny, pbz + h * nz
+            pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+        else:
+            pwa[0], pwa[1], pwa[2] = pax, pay, paz
+            pwb[0], pwb[1], pwb[2] = pax - h * nx, pay - h * ny, paz - h * nz
+        return 1
+    return 0
+
+
+@njit_inline
+def _take_polished(fs, d, w, wa, wb):
+    """Copy the polished minimum (ws t3 rows 15-18: direction, difference point,
+    support points of A and B) into EPA's d, w, wa, wb."""
+    for c in range(3):
+        d[c] = fs[_T3 + 15, c]
+        w[c] = fs[_T3 + 16, c]
+        wa[c] = fs[_T3 + 17, c]
+        wb[c] = fs[_T3 + 18, c]
+
+
+@njit_inline
 def _smooth_pair(ca, cb):
     """Whether GJK and EPA should try _newton_min_support on this pair of shape codes:
     one is an ellipsoid (its core makes h smooth and curved around whole regions of
@@ -1420,6 +1533,16 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         ud[c] = 0.0
         uwa[c] = 0.0
     lb = 0.0
+    # a polished minimum whose basin test failed: tested again at every later step, as
+    # the polytope grows (ws t3 rows 15-18 keep it until the next successful polish)
+    pend = False
+    p_planes = False
+    p_cap = 0.0
+    p_h = 0.0
+    # the test of a face normal (_face_polish): from a gain of EPA_FACE_TOL * scale, at
+    # most EPA_FACE_EVALS supports
+    face_left = EPA_FACE_EVALS if _face_pair(sa[0], sb[0]) else 0
+    face_at = EPA_FACE_TOL * scale
     while True:
         # face closest to the origin
         best = -1
@@ -1450,6 +1573,24 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
         if gain <= tol:
             converged = True
             break
+        if pend and ub < p_h:
+            pend = False                # a direction deeper than it was found
+        if face_left > 0 and not pend and gain <= face_at:
+            # near a box's face normal or a cylinder's axis: is the minimum on it?
+            k_f = _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, d[0], d[1], d[2])
+            face_left -= abs(k_f)
+            n_pol += abs(k_f)
+            if k_f > 0:
+                pend = True
+                p_planes = True
+                p_cap = EPA_FACE_CAP
+                p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
+        if pend and _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
+                                      p_cap):
+            _take_polished(fs, d, w, wa, wb)
+            polished = True
+            converged = True
+            break
         if tries > 0 and gain <= polish_at:
             # close to the minimum: Newton's method where the boundary is smooth, the
             # secant along a cylinder's side near its crease; where they give up EPA
@@ -1465,18 +1606,17 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 else:
                     k_pol = _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, best)
                 n_pol += abs(k_pol)
-                if k_pol > 0 and _polish_is_global(
-                        V, F, FN, FD, nf, fs[_T3 + 15],
-                        _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol, kc >= 0 or creaseless,
-                        _polish_cap(kc, capsule, box)):
-                    for c in range(3):
-                        d[c] = fs[_T3 + 15, c]
-                        w[c] = fs[_T3 + 16, c]
-                        wa[c] = fs[_T3 + 17, c]
-                        wb[c] = fs[_T3 + 18, c]
-                    polished = True
-                    converged = True
-                    break
+                if k_pol > 0:
+                    pend = True
+                    p_planes = kc >= 0 or creaseless
+                    p_cap = _polish_cap(kc, capsule, box)
+                    p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
+                    if _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
+                                         p_cap):
+                        _take_polished(fs, d, w, wa, wb)
+                        polished = True
+                        converged = True
+                        break
         it += 1
         # faces seen from w: a flood fill over the face adjacency from the best face,
         # so the removed region is connected (a disk) and the polytope stays a

@@ -116,8 +116,12 @@ trustworthy; scale = sum of bounding radii):
     point of h to a 1e-9 rad step, and the cap test) (EPA_REL_TOL was 1e-10 until
     2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x inside the issue's 1e-6 *
     scale; the normal of a smooth contact is then within ~sqrt(2e-8) ~ 1.4e-4 rad of
-    the exact one, its support value within 1e-8 * scale of the depth), and every
-    reported depth is certified from above: distance == -h_{A-B}(normal).
+    the exact one, its support value within 1e-8 * scale of the depth).  Every
+    reported depth is within EPA_REL_TOL * scale of h_{A-B}(normal), the upper bound
+    its normal certifies: equal to it when a polish ended EPA (Newton's method, a
+    crease or face minimum) or after the caps' pattern search, EPA's nearest face
+    distance (the lower bound) when EPA's own gap closed (tests/test_gjk_epa.py checks
+    distance == -h(normal) to 1e-7 * scale).
     GJK stays at 1e-12: separated normals must agree to ~1e-6 between inputs that
     differ by round-off (tests/test_narrowphase_api.py, batch vs single calls).
   * disagreements are settled by certificates in the tests (coal's sphere-cylinder
@@ -142,8 +146,9 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
-# Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of pairs by the batch
-# kernel and reused pair after pair; no state survives from one pair to the next.  Three
+# Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
+# pairs by the batch kernel and reused pair after pair; no state survives from one pair
+# to the next.  Three
 # backing arrays only (numba reference-counts every array passed to a function, so a
 # tuple of many small arrays costs more per call than the work of an analytic pair):
 #   fs float64 (_FS_ROWS, 3): simplex W, WA, WB and their saved copies, 3-vector scratch
@@ -1177,9 +1182,9 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  EPA
     then applies _polish_is_global as to Newton's method; GJK on cores apart needs no
     such test (h is convex there: a minimum on the sphere below zero is the global
-    one).  Results as _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
-    A and B, the cylinder's one slid to that point); returns the number of support
-    evaluations, negated when it gave up."""
+    one).  Results as _newton_min_support's (ws t3 rows 15-18: direction, difference
+    point, witnesses on A and B, the cylinder's one slid to that point); returns the
+    number of support evaluations, negated when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     fs = ws[0]

@@ -40,10 +40,9 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from bench.common import KINDS, pair_cases, quat_to_matrix  # noqa: E402
+from bench.common import KINDS, pair_cases, relative_poses  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
 from mkcollision_ros.kernels.constants import OUT_ITERS, OUT_SIZE, ST_SEPARATED  # noqa: E402
-from mkcollision_ros.kernels.geometry import relative_pose  # noqa: E402
 from mkcollision_ros.kernels.jit import borrow  # noqa: E402
 
 
@@ -74,15 +73,6 @@ def make_run(gjk_epa_ws):
                 sb = (codes[j], params[j], vrange[j, 0], vrange[j, 1])
                 st[k] = gjk_epa_ws(sa, sb, verts, rot[k], tr[k], out[k], ws, cutoff)
     return run
-
-
-def relative_poses(pos, quat):
-    n = len(pos) // 2
-    rot, tr = np.zeros((n, 3, 3)), np.zeros((n, 3))
-    for k in range(n):
-        rot[k], tr[k] = relative_pose(pos[2 * k], quat_to_matrix(quat[2 * k]),
-                                      pos[2 * k + 1], quat_to_matrix(quat[2 * k + 1]))
-    return rot, tr
 
 
 def main():

@@ -14,6 +14,7 @@ import numpy as np
 
 from mkcollision_ros.kernels.constants import (M_AUTO, OUT_SIZE, ST_PENETRATING,
                                                ST_TOUCHING)
+from mkcollision_ros.kernels.geometry import relative_pose
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table
 
@@ -202,6 +203,18 @@ def quat_to_matrix(q):
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def relative_poses(pos, quat):
+    """Pose of B in A's frame for each case (pairs (2k, 2k + 1) of ``pos``, ``quat``), as
+    the API computes it (geometry.relative_pose): rotations (n, 3, 3), translations
+    (n, 3)."""
+    n = len(pos) // 2
+    rot, tr = np.zeros((n, 3, 3)), np.zeros((n, 3))
+    for k in range(n):
+        rot[k], tr[k] = relative_pose(pos[2 * k], quat_to_matrix(quat[2 * k]),
+                                      pos[2 * k + 1], quat_to_matrix(quat[2 * k + 1]))
+    return rot, tr
 
 
 def z_to(n):

@@ -41,11 +41,10 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from bench.common import KINDS, pair_cases, quat_to_matrix  # noqa: E402
+from bench.common import KINDS, pair_cases, relative_poses  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
 from mkcollision_ros.kernels import mpr as MP  # noqa: E402
 from mkcollision_ros.kernels.constants import OUT_ITERS, OUT_SIZE, ST_SEPARATED  # noqa: E402
-from mkcollision_ros.kernels.geometry import relative_pose  # noqa: E402
 from mkcollision_ros.kernels.jit import borrow  # noqa: E402
 
 ROWS = ("cylinder-cylinder", "box-cylinder", "ellipsoid-cylinder", "capsule-cylinder",
@@ -81,16 +80,6 @@ def load_cases(folder, row):
             pickle.dump(cases, f)
     with open(path, "rb") as f:
         return pickle.load(f)
-
-
-def relative_poses(pos, quat):
-    """Pose of B in A's frame per case (geometry.relative_pose, as the API computes it)."""
-    rot = np.zeros((N, 3, 3))
-    tr = np.zeros((N, 3))
-    for k in range(N):
-        rot[k], tr[k] = relative_pose(pos[2 * k], quat_to_matrix(quat[2 * k]),
-                                      pos[2 * k + 1], quat_to_matrix(quat[2 * k + 1]))
-    return rot, tr
 
 
 def write_symbols(path):

@@ -557,8 +557,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
                         d[c] *= inv
                     k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
                                          kc // 3, kc % 3)
-                elif kc == -1 and (_smooth_pair(sa[0], sb[0])
-                                   or _ellipsoid_box(sa[0], sb[0])):
+                elif kc == -1 and _gjk_newton_pair(sa[0], sb[0]):
                     k_pol = _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws,
                                                 min(nsamp, 4), d[0] * inv, d[1] * inv,
                                                 d[2] * inv, w[0], w[1], w[2], wa[0], wa[1],
@@ -1092,13 +1091,13 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
 
 @njit_inline
 def _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz, cmin, lim):
-    """Whether the unit direction p lies within acos(cmin) of u and h(p) < ``lim`` (one
-    support evaluated when it lies there)."""
+    """(evaluated, deeper): whether the unit direction p lies within acos(cmin) of u (one
+    support is then evaluated there), and whether h(p) < ``lim`` there."""
     if px * ux + py * uy + pz * uz < cmin:
-        return False
+        return 0, False
     pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab, px, py, pz,
                                                    core)
-    return px * (pax - pbx) + py * (pay - pby) + pz * (paz - pbz) < lim
+    return 1, px * (pax - pbx) + py * (pay - pby) + pz * (paz - pbz) < lim
 
 
 @njit_inline
@@ -1122,9 +1121,11 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
             px, py, pz = ox, oy, oz
         if m % 2 == 1:
             px, py, pz = -px, -py, -pz
-        if _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz, cmin, lim):
-            return True, nev + 1
-        nev += 1 if px * ux + py * uy + pz * uz >= cmin else 0
+        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz,
+                                  cmin, lim)
+        nev += ev
+        if deeper:
+            return True, nev
     return False, nev
 
 
@@ -1140,9 +1141,11 @@ def _box_faces_deeper(sa, sb, verts, r_ab, t_ab, core, side, axis, ux, uy, uz, l
         px, py, pz = _axis_of(side, j, r_ab)
         if m % 2 == 1:
             px, py, pz = -px, -py, -pz
-        if _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz, cmin, lim):
-            return True, nev + 1
-        nev += 1 if px * ux + py * uy + pz * uz >= cmin else 0
+        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz,
+                                  cmin, lim)
+        nev += ev
+        if deeper:
+            return True, nev
     return False, nev
 
 
@@ -1243,7 +1246,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
 
 
 @njit_inline
-def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap):
+def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap, first):
     """Whether the local minimum h(n) found by _epa_polish or _kink_polish is the global
     one, up to the polytope's resolution.  The ray from the origin along any unit
     direction u leaves the polytope (which lies inside A - B) through some face g, at
@@ -1269,23 +1272,33 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap):
 
     A face deeper than hmin beyond the cap means another basin may be deeper
     (measured: an ellipsoid-cone pair whose polished minimum was 2e-4 * scale too
-    shallow, its normal 2.8 rad off): EPA goes on."""
+    shallow, its normal 2.8 rad off): EPA goes on.
+
+    Returns -1 when the minimum passes, else the index of a face that fails; EPA
+    passes it back as ``first`` (-1 for none) at the next test of the same minimum."""
     cmin = math.cos(cap)
-    for f in range(nf):
-        if FD[f] < hmin:
-            if planes:
-                if not FD[f] > 0.0:
-                    return False
-                c = FN[f, 0] * n[0] + FN[f, 1] * n[1] + FN[f, 2] * n[2]
-                if math.acos(min(1.0, max(-1.0, c))) + math.acos(FD[f] / hmin) > cap:
-                    return False
-            else:
-                for q in range(3):
-                    i = F[f, q]
-                    vn = math.sqrt(V[i, 0] ** 2 + V[i, 1] ** 2 + V[i, 2] ** 2)
-                    if V[i, 0] * n[0] + V[i, 1] * n[1] + V[i, 2] * n[2] < cmin * vn:
-                        return False
-    return True
+    for k in range(-1, nf):
+        # the face that failed the last test of this minimum first (EPA repeats the test
+        # at every step while the polytope grows; that face is often still there)
+        f = first if k < 0 else k
+        if f < 0 or (k >= 0 and f == first) or not FD[f] < hmin:
+            continue
+        if planes:
+            if not FD[f] > 0.0:
+                return f
+            c = min(1.0, FN[f, 0] * n[0] + FN[f, 1] * n[1] + FN[f, 2] * n[2])
+            r = FD[f] / hmin
+            # acos(c) + acos(r) > cap, without acos: r lies in (0, 1), so the sum lies
+            # in [0, pi] once acos(c) <= cap (< pi / 2), where cos decreases
+            if c < cmin or c * r - math.sqrt((1.0 - c * c) * (1.0 - r * r)) < cmin:
+                return f
+        else:
+            for q in range(3):
+                i = F[f, q]
+                vn = math.sqrt(V[i, 0] ** 2 + V[i, 1] ** 2 + V[i, 2] ** 2)
+                if V[i, 0] * n[0] + V[i, 1] * n[1] + V[i, 2] * n[2] < cmin * vn:
+                    return f
+    return -1
 
 
 @njit_inline
@@ -1428,6 +1441,14 @@ def _ellipsoid_box(ca, cb):
 
 
 @njit_inline
+def _gjk_newton_pair(ca, cb):
+    """Whether GJK on cores apart tries Newton's method where h is smooth (away from
+    the creases _kink_side finds): the pairs EPA polishes so (_smooth_pair) and an
+    ellipsoid with a box (_ellipsoid_box)."""
+    return _smooth_pair(ca, cb) or _ellipsoid_box(ca, cb)
+
+
+@njit_inline
 def _edge_of(F, g, a, b):
     """Index e of the edge {a, b} of face g (either direction), or -1."""
     for e in range(3):
@@ -1544,6 +1565,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     p_planes = False
     p_cap = 0.0
     p_h = 0.0
+    p_fail = -1                         # a face that failed its last test
     # the test of a face normal (_face_polish): from a gain of EPA_FACE_TOL * scale, at
     # most EPA_FACE_EVALS supports
     face_left = EPA_FACE_EVALS if _face_pair(sa[0], sb[0]) else 0
@@ -1590,12 +1612,15 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 p_planes = True
                 p_cap = EPA_FACE_CAP
                 p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
-        if pend and _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
-                                      p_cap):
-            _take_polished(fs, d, w, wa, wb)
-            polished = True
-            converged = True
-            break
+                p_fail = -1
+        if pend:
+            p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
+                                       p_cap, p_fail)
+            if p_fail < 0:
+                _take_polished(fs, d, w, wa, wb)
+                polished = True
+                converged = True
+                break
         if tries > 0 and gain <= polish_at:
             # close to the minimum: Newton's method where the boundary is smooth, the
             # secant along a cylinder's side near its crease; where they give up EPA
@@ -1616,8 +1641,9 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                     p_planes = kc >= 0 or creaseless
                     p_cap = _polish_cap(kc, capsule, box)
                     p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
-                    if _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
-                                         p_cap):
+                    p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h,
+                                               p_planes, p_cap, -1)
+                    if p_fail < 0:
                         _take_polished(fs, d, w, wa, wb)
                         polished = True
                         converged = True
@@ -1868,7 +1894,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
                               ra + rb + max(cutoff, TOUCH_TOL * scale),
-                              _smooth_pair(sa[0], sb[0]) or _ellipsoid_box(sa[0], sb[0])
+                              _gjk_newton_pair(sa[0], sb[0])
                               or _has_crease(sa[0]) or _has_crease(sb[0]))
     iters = it
     if flag == _GJK_POLISHED:

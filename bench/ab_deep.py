@@ -12,6 +12,8 @@ borrowed arrays, one workspace, ``--cutoff`` 0 as in contacts mode).
     PYTHONPATH=. .venv/bin/python bench/ab_deep.py REV [ROW ...] [--n 2000] [--rounds 7]
     ... --subset all|deep|apart     # which pairs are timed (default deep)
     ... --no-time --n 100000        # results only, on many pairs
+    ... --check-n 100000            # also results only on that many other cases per
+                                    # row (seed + 1), in the same process: one compile
 
 Cases: bench.common.pair_cases(a, b, n, seed) with ``--seed``.  "deep" pairs are those
 deeper than 1e-3 * scale by the revision's result, "apart" those it finds apart whose
@@ -21,7 +23,8 @@ revision's, over scale (each is within EPA_REL_TOL * scale of the true one: minu
 h_{A-B} along a polished normal, at most the true distance, or minus EPA's nearest face
 distance, at least it); pairs apart are left out (in contacts mode their distance is
 the first separating plane's bound, which a kernel may tighten); and the largest normal
-difference on pairs farther from touching than 1e-3 * scale in both.
+difference on pairs farther from touching than 1e-3 * scale in both (penetrating in
+both unless --cutoff is inf: apart, a contacts-mode normal is any separating direction).
 
 Measured with it (session 16, against b4cf41d; `--n 2000`, deep pairs, seven rounds):
 see BENCHMARKS.md.
@@ -87,21 +90,26 @@ def main():
     ap.add_argument("--cutoff", type=float, default=0.0)
     ap.add_argument("--subset", choices=("all", "deep", "apart"), default="deep")
     ap.add_argument("--no-time", action="store_true")
+    ap.add_argument("--check-n", type=int, default=0,
+                    help="first compare results on this many cases per row (seed + 1)")
     args = ap.parse_args()
     numba.set_num_threads(1)
     with tempfile.TemporaryDirectory() as tmp:
         R = import_revision(args.rev, tmp)
         runs = {"rev": (make_run(R.gjk_epa_ws), R.make_gjk_workspace()),
                 "ours": (make_run(G.gjk_epa_ws), G.make_gjk_workspace())}
-        for row in args.rows:
+        jobs = [(row, args.check_n, args.seed + 1, False) for row in args.rows
+                if args.check_n > 0]
+        jobs += [(row, args.n, args.seed, not args.no_time) for row in args.rows]
+        for row, n, seed0, timed in jobs:
             a, b = row.split("-")
-            seed = args.seed + 101 * KINDS.index(a) + KINDS.index(b)
-            shapes, table, pairs, pos, quat = pair_cases(a, b, args.n, seed=seed)
+            seed = seed0 + 101 * KINDS.index(a) + KINDS.index(b)
+            shapes, table, pairs, pos, quat = pair_cases(a, b, n, seed=seed)
             rot, tr = relative_poses(pos, quat)
             scale = table.params[0::2, 7] + table.params[1::2, 7]
             res = {}
             for name, (run, ws) in runs.items():
-                out, st = np.zeros((args.n, OUT_SIZE)), np.zeros(args.n, np.int64)
+                out, st = np.zeros((n, OUT_SIZE)), np.zeros(n, np.int64)
                 run(table.codes, table.params, table.vrange, table.verts, pairs, rot, tr,
                     out, st, ws, args.cutoff, 1)
                 res[name] = (out, st)
@@ -110,22 +118,26 @@ def main():
             # only the first separating plane's bound, which a kernel may tighten)
             pen = (ro[:, 0] < 0.0) & (oo[:, 0] < 0.0)
             lower = (ro[pen, 0] - oo[pen, 0]) / scale[pen]
+            # normals where they are defined: apart in contacts mode (a finite cutoff) a
+            # normal is any separating direction, which a kernel may tighten too
             far = (np.abs(ro[:, 0]) > 1e-3 * scale) & (np.abs(oo[:, 0]) > 1e-3 * scale)
+            if np.isfinite(args.cutoff):
+                far &= pen
             ang = 2.0 * np.arcsin(np.minimum(1.0, 0.5 * np.linalg.norm(
                 oo[far, 1:4] - ro[far, 1:4], axis=1)))
-            line = (f"{row:20s} n {args.n}: status same {np.mean(rs == os_) * 100:6.2f}%, "
+            line = (f"{row:20s} n {n}: status same {np.mean(rs == os_) * 100:6.2f}%, "
                     f"penetrating {pen.sum()}: distance lower by <= "
                     f"{max(lower.max(initial=0.0), 0.0):.1e} * scale, higher by <= "
                     f"{max(-lower.min(initial=0.0), 0.0):.1e}, normal <= "
                     f"{(ang.max() if ang.size else 0.0):.1e} rad")
-            if not args.no_time:
+            if timed:
                 if args.subset == "deep":
                     sel = np.flatnonzero(ro[:, 0] < -1e-3 * scale)
                 elif args.subset == "apart":
                     gap = np.linalg.norm(tr, axis=1) - scale
                     sel = np.flatnonzero((rs == ST_SEPARATED) & (gap <= 0.0))
                 else:
-                    sel = np.arange(args.n)
+                    sel = np.arange(n)
                 ts = {name: [] for name in runs}
                 for _ in range(args.rounds):
                     for name, (run, ws) in runs.items():

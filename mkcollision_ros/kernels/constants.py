@@ -70,7 +70,8 @@ EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther th
 EPA_FACE_TOL = 1e-1         # test a box's face normal or a cylinder's axis within
                            # EPA_KINK_NEAR rad of EPA's best face normal for the minimum
                            # (gjk_epa._face_polish) once the support gain < tol * scale
-EPA_FACE_EVALS = 3         # at most this many supports for those tests per pair
+EPA_FACE_EVALS = 3         # at most this many supports for those tests per pair, in EPA
+                           # and again in GJK on cores apart (gjk_epa._gjk)
 EPA_FACE_CAP = 0.1         # EPA_POLISH_CAP for a minimum found so (rad): at 0.5, 1 of 100,000
                            # random ellipsoid-cylinder pairs kept one 0.31 rad from a
                            # deeper one

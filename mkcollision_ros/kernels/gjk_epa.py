@@ -474,10 +474,11 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
     closest point of the simplex.
     ``stop`` (m, may be inf): as soon as a support plane proves the distance > stop
     (v.w / |v| > stop), return _GJK_BOUND with that lower bound.
-    ``polish`` True: once the duality gap is below GJK_POLISH_TOL |v|^2, try
-    _newton_min_support from the current direction with the last few supports as
-    samples (ellipsoid cores: GJK needs ~25 steps to 1e-12 there); on success return
-    _GJK_POLISHED, else go on.
+    ``polish`` True: once the duality gap is below 0.1 |v|^2, for a _face_pair, the
+    face test (_face_polish) where the direction is near a face normal; once it is below
+    GJK_POLISH_TOL |v|^2, the crease search or _newton_min_support from the current
+    direction with the last few supports as samples (ellipsoid cores: GJK needs ~25
+    steps to 1e-12 there); on success return _GJK_POLISHED, else go on.
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND,
     the lower bound v.w / |v| for _GJK_BOUND, else 0).
     Inlined into its two callers: as a called function it took 0.3 us more per deep pair
@@ -1356,9 +1357,9 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
     when the point projects outside the face, 0 when d is near no face normal.  In GJK
     on cores apart (h < 0 at f) the local minimum is the global one (h is convex
     there).  EPA then applies _polish_is_global with the plane test under a cap of
-    EPA_FACE_CAP (another local minimum may lie close by: at 0.5 rad, a minimum on a cylinder's axis
-    was kept 0.31 rad from a deeper one, 9e-4 * scale below it, in 1 of 100,000 random
-    ellipsoid-cylinder pairs; regression scene
+    EPA_FACE_CAP (another local minimum may lie close by: at 0.5 rad, a minimum on a
+    cylinder's axis was kept 0.31 rad from a deeper one, 9e-4 * scale below it, in 1
+    of 100,000 random ellipsoid-cylinder pairs; regression scene
     mkc_face_polish_wrong_basin_ellipsoid_cylinder)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)

@@ -62,6 +62,14 @@ EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
 EPA_REL_TOL = 1e-8         # stop when support gain < tol * scale (dimensionless)
 EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the support gain
                            # < tol * scale, and once more at 0.01 * tol * scale if it gave up
+POLISH_STEP_DONE = 1e-7    # Newton's method and the crease search end once their step is
+                           # below this (rad): the direction is then within ~1e-7 rad of
+                           # the minimum and h within ~1e-14 * scale of it (until session
+                           # 18: 1e-9, one more support for nothing the tolerances see;
+                           # pure-Python traces, 400 random pairs, GJK + EPA steps of the
+                           # penetrating ones: ellipsoid-ellipsoid 17.43 -> 15.88,
+                           # ellipsoid-cylinder 17.71 -> 17.21 with Newton's method alone,
+                           # distances within 1.5e-13 * scale of the old ones)
 EPA_POLISH_ITERS = 6       # its steps (support evaluations)
 EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
 EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther than this

@@ -92,13 +92,14 @@ Phases of ``gjk_epa``
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
      least squares to nearby support points (EPA's face vertices with the directions
      they were found along, GJK's last supports, then its own steps).  Quadratic where
-     A - B is smooth and curved (ellipsoid cores): ~4 supports from a 1e-3 gap to a
-     1e-9 rad step.  It gives up on kinks of h (flat faces, edges, rims, segment
-     cores), which is why only ellipsoid pairs try it (cylinder pairs: kinks on every
-     pair tried).  Measured on 500 random pairs per type (process CPU per pair, one
-     thread): ellipsoid-ellipsoid with overlapping cores 9.2 -> 5.9 us, cores apart
-     2.6 -> 1.6 us; against a run at EPA_REL_TOL 1e-11 on 1500 pairs per type, normals
-     within 3.8e-4 rad and distances within 1e-8 * scale, as before.
+     A - B is smooth and curved (ellipsoid cores): ~4 supports from a 1e-3 gap to a step
+     below POLISH_STEP_DONE (1e-7 rad; 1e-9 until session 18).  It gives up on kinks of h
+     (flat faces, edges, rims, segment cores), which is why only ellipsoid pairs try it
+     (cylinder pairs: kinks on every pair tried).  Measured on 500 random pairs per type
+     (process CPU per pair, one thread): ellipsoid-ellipsoid with overlapping cores
+     9.2 -> 5.9 us, cores apart 2.6 -> 1.6 us; against a run at EPA_REL_TOL 1e-11 on
+     1500 pairs per type, normals within 3.8e-4 rad and distances within 1e-8 * scale,
+     as before.
   3. If a cap is hit (valleys of equally deep directions, e.g. a sphere centred on a
      cylinder's or cone's axis, two coaxial cylinders), the best upper bound min h(u)
      over the evaluated normals is polished by a pattern search over directions and
@@ -122,15 +123,15 @@ trustworthy; scale = sum of bounding radii):
     typically 1e-9; the residual is mostly coal's (its EPA stops early, often failing
     outright at tolerances below 1e-10).  Our own bound gap is < EPA_REL_TOL * scale =
     1e-8 * scale whenever EPA converges without Newton's method (with it: a stationary
-    point of h to a 1e-9 rad step, and the cap test) (EPA_REL_TOL was 1e-10 until
-    2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x inside the issue's 1e-6 *
-    scale; the normal of a smooth contact is then within ~sqrt(2e-8) ~ 1.4e-4 rad of
-    the exact one, its support value within 1e-8 * scale of the depth).  Every
-    reported depth is within EPA_REL_TOL * scale of h_{A-B}(normal), the upper bound
-    its normal certifies: equal to it when a polish ended EPA (Newton's method, a
-    crease or face minimum) or after the caps' pattern search, EPA's nearest face
-    distance (the lower bound) when EPA's own gap closed (tests/test_gjk_epa.py checks
-    distance == -h(normal) to 1e-7 * scale).
+    point of h to a POLISH_STEP_DONE = 1e-7 rad step, and the cap test) (EPA_REL_TOL was
+    1e-10 until 2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x
+    inside the issue's 1e-6 * scale; the normal of a smooth contact is then within
+    ~sqrt(2e-8) ~ 1.4e-4 rad of the exact one, its support value within 1e-8 * scale of
+    the depth).  Every reported depth is within EPA_REL_TOL * scale of h_{A-B}(normal),
+    the upper bound its normal certifies: equal to it when a polish ended EPA (Newton's
+    method, a crease or face minimum) or after the caps' pattern search, EPA's nearest
+    face distance (the lower bound) when EPA's own gap closed (tests/test_gjk_epa.py
+    checks distance == -h(normal) to 1e-7 * scale).
     GJK stays at 1e-12: separated normals must agree to ~1e-6 between inputs that
     differ by round-off (tests/test_narrowphase_api.py, batch vs single calls).
   * disagreements are settled by certificates in the tests (coal's sphere-cylinder
@@ -149,7 +150,8 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         EPA_POLISH_ITERS, EPA_POLISH_STEP, EPA_POLISH_TOL, EPA_REL_TOL,
                         EPA_WITNESS_SHIFT, GJK_ABS_TOL, GJK_FLAT_TOL, GJK_MAX_ITERS,
                         GJK_POLISH_TOL, GJK_REL_TOL, M_GJK_EPA, OUT_DIST, OUT_ITERS,
-                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE, SPHERE,
+                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, PLANE,
+                        POLISH_STEP_DONE, SPHERE,
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
@@ -876,7 +878,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
     taken.  Gives up when the fitted Hessian is not positive definite (flat faces,
     edges, kinks of h, where EPA and GJK are exact or fast), a step is longer than
     EPA_POLISH_STEP rad, h grows, or EPA_POLISH_ITERS steps do not bring the step below
-    1e-9 rad; the caller then goes on with its own iteration.  On success the
+    POLISH_STEP_DONE; the caller then goes on with its own iteration.  On success the
     direction, the difference point and the support points of A and B are left in ws
     t3 rows 15-18 (the caller's d, wa, wb, w stay as they were).
     Returns the number of support evaluations, negated when it gave up."""
@@ -942,7 +944,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
             return -(k_it + 1)
         nx, ny, nz, wx, wy, wz, h = mx, my, mz, qx, qy, qz, hn
         ax, ay, az = pax, pay, paz
-        if step <= 1e-9:
+        if step <= POLISH_STEP_DONE:
             pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
             pd[0], pd[1], pd[2] = nx, ny, nz
             pw[0], pw[1], pw[2] = wx, wy, wz
@@ -1066,9 +1068,9 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
     Along the circle, u(t) = cos t n + sin t e (e = k x n), h is smooth between the
     other shape's creases and its derivative is g(t) = w(u(t)) . u'(t), w a support
     point of A - B (any point of the support segment gives the same g, as u' is
-    normal to k).  Converged when the next step is below 1e-9 rad with |g| <= 1e-6 *
-    scale (a crease of the other shape shows as a jump in g: the secant closes in on
-    the jump with g still large) and a positive secant slope.  Returns (ok, supports
+    normal to k).  Converged when the next step is below POLISH_STEP_DONE (rad) with
+    |g| <= 1e-6 * scale (a crease of the other shape shows as a jump in g: the secant
+    closes in on the jump with g still large) and a positive secant slope.  Returns (ok, supports
     evaluated, lowest h evaluated, then at the last point: h, u (3), the support
     points of A and of B (3 each)); ok is False when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
@@ -1103,7 +1105,7 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
             if not slope > 0.0:
                 break
             step = -g / slope
-            if abs(step) <= 1e-9:
+            if abs(step) <= POLISH_STEP_DONE:
                 ok = abs(g) <= 1e-6 * scale
                 break
         step = max(-EPA_KINK_STEP, min(EPA_KINK_STEP, step))

@@ -1070,9 +1070,9 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
     point of A - B (any point of the support segment gives the same g, as u' is
     normal to k).  Converged when the next step is below POLISH_STEP_DONE (rad) with
     |g| <= 1e-6 * scale (a crease of the other shape shows as a jump in g: the secant
-    closes in on the jump with g still large) and a positive secant slope.  Returns (ok, supports
-    evaluated, lowest h evaluated, then at the last point: h, u (3), the support
-    points of A and of B (3 each)); ok is False when it gave up."""
+    closes in on the jump with g still large) and a positive secant slope.  Returns
+    (ok, supports evaluated, lowest h evaluated, then at the last point: h, u (3), the
+    support points of A and of B (3 each)); ok is False when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     c = dx * kx + dy * ky + dz * kz
     nx, ny, nz = dx - c * kx, dy - c * ky, dz - c * kz

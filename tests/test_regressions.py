@@ -62,9 +62,10 @@ the crease), mkc_crease_polish_wrong_basin_ellipsoid_box (the same on a box's ed
 session 15: a minimum 0.20 rad from a deeper one in a vertex's region),
 mkc_crease_polish_early_wrong_basin_cylinder_cylinder (the search along a cylinder's
 crease tried at a gain of 1e-2 * scale, session 16, not adopted: a minimum 0.34 rad from
-the deepest direction), mkc_face_polish_wrong_basin_ellipsoid_cylinder (the test of a
-face normal, session 16, under a 0.5 rad cap: a minimum on a cylinder's axis 0.31 rad
-from a deeper one),
+the deepest direction; tried again in session 18, and the same between an ellipsoid
+and a cylinder: mkc_crease_polish_early_wrong_basin_ellipsoid_cylinder, 0.25 rad),
+mkc_face_polish_wrong_basin_ellipsoid_cylinder (the test of a face normal, session 16,
+under a 0.5 rad cap: a minimum on a cylinder's axis 0.31 rad from a deeper one),
 mkc_coincident_coaxial_cylinders
 (two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
 reported FAILED and dropped by the pipeline), mkc_coincident_coaxial_capsules (the

@@ -579,26 +579,39 @@ def test_epa_face_setup_flips_a_face_wound_toward_the_interior():
     assert FD[0] == np.inf and not np.any(FN[0])
 
 
-@pytest.mark.parametrize("cores", ["overlap", "apart"])
-@pytest.mark.parametrize("kind", ["box", "cylinder"])
+def antiprism(radius=1.2, half=0.5):
+    """A convex hull whose top face is the triangle of circumradius ``radius`` at
+    z = half (the bottom one turned by 60 degrees at -half): every face a triangle."""
+    pts = [[radius * math.cos(k * math.pi / 3.0), radius * math.sin(k * math.pi / 3.0),
+            half if k % 2 == 0 else -half] for k in range(6)]
+    return {"type": "convex", "points": pts}
+
+
+@pytest.mark.parametrize("kind, cores", [("box", "overlap"), ("box", "apart"),
+                                         ("cylinder", "overlap"), ("cylinder", "apart"),
+                                         ("convex", "apart")])
 def test_face_normal_minimum_is_exact(kind, cores):
-    # An ellipsoid pressed into a box's top face or a cylinder's top cap, its lowest
-    # point over the face's interior: the deepest direction is the face normal, and the
-    # depth is the face's height less the ellipsoid's lowest point, in closed form.
+    # An ellipsoid pressed into a box's top face, a cylinder's top cap or a convex
+    # hull's top face (an antiprism's triangle), its lowest point over the face's
+    # interior: the deepest direction is the face normal, and the depth is the face's
+    # height less the ellipsoid's lowest point, in closed form.
     # EPA alone stops within its tolerance (depths within 1e-8 * scale); the face test
     # (gjk_epa._face_polish) lands on the normal itself, with the witness on the face
     # exactly on its plane: all pairs within EPA's bounds, and nearly all exact (49 and
     # 50 of 50 when written; the others were closed by EPA before the face test's cap
-    # check passed).
+    # check passed).  A hull's faces are tested by GJK only (gjk_epa._hull_polish, on
+    # cores apart), so the hull is pressed in shallower than the rolling radius only.
     # Shallower than the ellipsoid's rolling radius its core stays apart from the face's
     # shape and GJK solves the pair: its own face test (in _gjk) takes the normal within
     # a few supports and needs no basin check (h is convex there), so every pair is
-    # exact and the median pair takes few iterations (4 on the box, 5 on the cylinder
-    # when written; GJK converging on the curved core by itself: medians 10 and 11).
+    # exact and the median pair takes few iterations (6 on the box, 5 on the cylinder,
+    # 8 on the hull, measured 2026-11-26; GJK converging on the curved core by itself:
+    # medians 10, 11 and 10).
     rng = np.random.default_rng(16)
     iters = []
     face = ({"type": "box", "size": [2.0, 1.6, 1.0]} if kind == "box"
-            else {"type": "cylinder", "radius": 0.9, "height": 1.0})
+            else {"type": "cylinder", "radius": 0.9, "height": 1.0} if kind == "cylinder"
+            else antiprism())
     exact = 0
     for _ in range(50):
         radii = rng.uniform(0.15, 0.35, 3)
@@ -621,7 +634,8 @@ def test_face_normal_minimum_is_exact(kind, cores):
         r_ = collide(face, ID, {"type": "ellipsoid", "radii": radii.tolist()}, pose_e,
                      method="gjk_epa")
         assert r_.status == ST_PENETRATING
-        scale = math.hypot(*face.get("size", [0, 0, 0])) / 2 + radii.max()
+        scale = (O.bounding_radius(face) if kind == "convex"
+                 else math.hypot(*face.get("size", [0, 0, 0])) / 2) + radii.max()
         err_d = abs(r_.depth - depth)
         err_n = np.linalg.norm(r_.normal - [0.0, 0.0, 1.0])     # ~ the angle
         assert err_d <= 1e-8 * scale and err_n <= 1e-3
@@ -632,7 +646,67 @@ def test_face_normal_minimum_is_exact(kind, cores):
         iters.append(r_.iterations)
     assert exact >= (45 if cores == "overlap" else 50)
     if cores == "apart":
-        assert np.median(iters) <= 6
+        assert np.median(iters) <= (9 if kind == "convex" else 6)
+
+
+@pytest.mark.parametrize("hull_is_a", [True, False])
+def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
+    # An ellipsoid pressed onto the ridge of a wedge (a convex hull whose top edge runs
+    # along x at z = 0.5, its two faces sloping down 35 degrees to either side).  Where
+    # the deepest direction lies on the ridge's crease (the arc of directions normal to
+    # x strictly between the two faces' normals), the crease search
+    # (gjk_epa._hull_polish) lands on it: the normal is normal to the ridge to
+    # round-off, the depth is h(n) of the pair, and the hull's witness lies on the
+    # ridge (within 1e-7 * scale: the search stops at a 1e-7 rad step, and the
+    # witnesses share the residual).  The ellipsoid is pressed in less than its
+    # rolling radius, so the cores stay apart and GJK solves the pair (EPA does not
+    # search a hull's creases, see gjk_epa._hull_side); GJK alone ends within its
+    # tolerance, its normal off the crease (before the search no pair's depth was h(n)
+    # to 1e-12 * scale with the normal on the crease; with it 50 of 50, when written).
+    # A pair whose minimum lies on a side face's normal instead counts as well (the
+    # face test, _hull_face_test, finds it exactly).  Depths are checked against the
+    # slow oracle's direction search (oracles.signed_distance_oracle), whose pattern
+    # search closes slowly along a crease: both are upper bounds of the true depth, so
+    # ours must not exceed its.
+    rng = np.random.default_rng(19)
+    slope = math.radians(35.0)
+    wedge = {"type": "convex", "points": [[x, y, 0.5 - abs(y) * math.tan(slope)]
+                                         for x in (-1.0, 1.0) for y in (-1.0, 0.0, 1.0)]}
+    on_crease = on_face = 0
+    for _ in range(50):
+        radii = rng.uniform(0.15, 0.35, 3)
+        q = O.random_quats(rng, 1)[0]
+        r = O.quat_matrix(q)
+        sigma = r @ np.diag(radii ** 2) @ r.T
+        low = math.sqrt(sigma[2, 2])
+        roll = radii.min() ** 2 / radii.max()
+        # shallower than the rolling radius: the cores stay apart and GJK solves the
+        # pair (EPA does not search a hull's creases, see gjk_epa._hull_side)
+        depth = roll * rng.uniform(0.2, 0.9)
+        # the ellipsoid's lowest point above the ridge, pressed in by about depth
+        c = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.02, 0.02), 0.5 - depth])
+        c += sigma[:, 2] / low
+        ell = {"type": "ellipsoid", "radii": radii.tolist()}
+        pe = pose(c, q)
+        res = gjk(wedge, ID, ell, pe) if hull_is_a else gjk(ell, pe, wedge, ID)
+        assert res.status == ST_PENETRATING
+        scale = O.bounding_radius(wedge) + radii.max()
+        want, _ = (O.signed_distance_oracle(wedge, ID, ell, pe) if hull_is_a
+                   else O.signed_distance_oracle(ell, pe, wedge, ID))
+        assert res.distance >= want - 1e-9 * scale
+        n = np.asarray(res.normal) * (1.0 if hull_is_a else -1.0)     # out of the wedge
+        h = O.cso_support(wedge, ID, ell, pe, n[None])[0]
+        assert abs(h + res.distance) <= 1e-8 * scale           # GJK's bound
+        if abs(n[0]) <= 1e-12 and abs(abs(n[1]) - math.sin(slope)) <= 1e-12:
+            on_face += 1                                # a side face's normal
+            assert abs(h + res.distance) <= 1e-12 * scale
+        elif abs(n[0]) <= 1e-12 and abs(n[1]) < math.sin(slope) - 1e-6:
+            on_crease += 1
+            assert abs(h + res.distance) <= 1e-12 * scale      # depth == h(normal)
+            ridge = np.asarray(res.point_a if hull_is_a else res.point_b)
+            assert abs(ridge[1]) <= 1e-7 * scale and abs(ridge[2] - 0.5) <= 1e-7 * scale
+            assert abs(ridge[0]) <= 1.0
+    assert on_crease + on_face >= 48 and on_crease >= 40
 
 
 def test_newton_minimum_is_stationary():

@@ -66,6 +66,9 @@ the deepest direction; tried again in session 18, and the same between an ellips
 and a cylinder: mkc_crease_polish_early_wrong_basin_ellipsoid_cylinder, 0.25 rad),
 mkc_face_polish_wrong_basin_ellipsoid_cylinder (the test of a face normal, session 16,
 under a 0.5 rad cap: a minimum on a cylinder's axis 0.31 rad from a deeper one),
+mkc_hull_face_polish_wrong_basin_ellipsoid_convex (the same test on a convex hull's
+face in EPA, session 19, not adopted: under a 0.1 rad cap a minimum 0.077 rad from a
+deeper one),
 mkc_coincident_coaxial_cylinders
 (two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
 reported FAILED and dropped by the pipeline), mkc_coincident_coaxial_capsules (the

@@ -1486,6 +1486,41 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap, first):
 
 
 @njit_inline
+def _face_point(sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz):
+    """One support of A - B along the unit direction n (A's frame), the outward normal
+    of a face of the shape on ``side`` (A's face: n; B's: -n in B's own terms).
+    Returns h = n . (a - b), the other shape's support point in the face shape's frame
+    (3), and the support points a and b (A's frame, 3 each)."""
+    pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab,
+                                                   nx, ny, nz, core)
+    h = nx * (pax - pbx) + ny * (pay - pby) + nz * (paz - pbz)
+    if side == 0:
+        qx, qy, qz = pbx, pby, pbz
+    else:
+        ox, oy, oz = pax - t_ab[0], pay - t_ab[1], paz - t_ab[2]
+        qx = r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz
+        qy = r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz
+        qz = r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz
+    return h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz
+
+
+@njit_inline
+def _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz):
+    """Store the minimum at a face's normal n (ws t3 rows 15-18: direction, difference
+    point h n, witnesses on A and B): the other shape's point, and on the face that
+    point moved onto the face's plane."""
+    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    pd[0], pd[1], pd[2] = nx, ny, nz
+    pw[0], pw[1], pw[2] = h * nx, h * ny, h * nz
+    if side == 0:
+        pwa[0], pwa[1], pwa[2] = pbx + h * nx, pby + h * ny, pbz + h * nz
+        pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+    else:
+        pwa[0], pwa[1], pwa[2] = pax, pay, paz
+        pwb[0], pwb[1], pwb[2] = pax - h * nx, pay - h * ny, paz - h * nz
+
+
+@njit_inline
 def _face_pair(ca, cb):
     """Whether EPA tries _face_polish on this pair of shape codes: a box or a cylinder
     against a sphere or an ellipsoid (cores without kinks, so the face's own first-order
@@ -1547,17 +1582,8 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
         kx, ky, kz = _axis_of(side, k, r_ab)
         s = sg * (1.0 if cbest > 0.0 else -1.0)
         nx, ny, nz = s * kx, s * ky, s * kz
-        pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab,
-                                                       nx, ny, nz, core)
-        h = nx * (pax - pbx) + ny * (pay - pby) + nz * (paz - pbz)
-        # the other shape's point in the face shape's frame
-        if side == 0:
-            qx, qy, qz = pbx, pby, pbz
-        else:
-            ox, oy, oz = pax - t_ab[0], pay - t_ab[1], paz - t_ab[2]
-            qx = r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz
-            qy = r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz
-            qz = r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz
+        h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
+            sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz)
         prm = sa[1] if side == 0 else sb[1]
         eps = 1e-7 * scale
         if code == BOX:
@@ -1568,16 +1594,7 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
             inside = prm[0] > eps and qx * qx + qy * qy <= (prm[0] - eps) ** 2
         if not inside:
             return -1
-        pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-        pd[0], pd[1], pd[2] = nx, ny, nz
-        pw[0], pw[1], pw[2] = h * nx, h * ny, h * nz
-        # the witness on the face: the other's point moved onto the face's plane
-        if side == 0:
-            pwa[0], pwa[1], pwa[2] = pbx + h * nx, pby + h * ny, pbz + h * nz
-            pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
-        else:
-            pwa[0], pwa[1], pwa[2] = pax, pay, paz
-            pwb[0], pwb[1], pwb[2] = pax - h * nx, pay - h * ny, paz - h * nz
+        _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
         return 1
     return 0
 
@@ -1626,17 +1643,8 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, h
         ux = -(r_ab[0, 0] * nx + r_ab[0, 1] * ny + r_ab[0, 2] * nz)
         uy = -(r_ab[1, 0] * nx + r_ab[1, 1] * ny + r_ab[1, 2] * nz)
         uz = -(r_ab[2, 0] * nx + r_ab[2, 1] * ny + r_ab[2, 2] * nz)
-    pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab,
-                                                   ux, uy, uz, core)
-    h = ux * (pax - pbx) + uy * (pay - pby) + uz * (paz - pbz)
-    # the other shape's point in the hull's frame
-    if side == 0:
-        qx, qy, qz = pbx, pby, pbz
-    else:
-        ox, oy, oz = pax - t_ab[0], pay - t_ab[1], paz - t_ab[2]
-        qx = r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz
-        qy = r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz
-        qz = r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz
+    h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
+        sa, sb, verts, r_ab, t_ab, core, side, ux, uy, uz)
     eps = 1e-7 * scale
     for e in range(3):
         a_ = i if e == 0 else (j if e == 1 else m)
@@ -1647,15 +1655,7 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, h
               + nz * (ex * ry - ey * rx))
         if not sd >= eps * math.sqrt(ex * ex + ey * ey + ez * ez):
             return -1
-    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-    pd[0], pd[1], pd[2] = ux, uy, uz
-    pw[0], pw[1], pw[2] = h * ux, h * uy, h * uz
-    if side == 0:
-        pwa[0], pwa[1], pwa[2] = pbx + h * ux, pby + h * uy, pbz + h * uz
-        pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
-    else:
-        pwa[0], pwa[1], pwa[2] = pax, pay, paz
-        pwb[0], pwb[1], pwb[2] = pax - h * ux, pay - h * uy, paz - h * uz
+    _face_minimum(fs, side, ux, uy, uz, h, pax, pay, paz, pbx, pby, pbz)
     return 1
 
 

@@ -1602,15 +1602,15 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
 @njit_kernel
 def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, hx, hy,
                     hz):
-    """_face_polish on a convex hull (the shape on ``side``; h the hull-frame direction
-    of EPA's best face normal or GJK's direction, i, j, m its three highest vertices
-    along it): whether the minimum of h is exactly at the normal of the face through
-    i, j, m.  That plane is a face of the hull if no vertex lies above it, and is tested
-    if its normal lies within EPA_KINK_NEAR rad of the direction (else 0).  One
-    support along that normal; the other shape's point must project into the triangle
-    i, j, m, 1e-7 * scale inside each edge (a face with more than three vertices, a
-    quad of a box-like mesh, is tested on that triangle only: a point that projects
-    elsewhere in the face fails the test, and EPA goes on).  Returns and results as
+    """_face_polish on a convex hull (the shape on ``side``; (hx, hy, hz) GJK's
+    direction in the hull's frame, i, j, m the three highest vertices along it):
+    whether the minimum of h is exactly at the normal of the face through i, j, m.
+    That plane is a face of the hull if no vertex lies above it, and is tested if its
+    normal lies within EPA_KINK_NEAR rad of the direction (else 0).  One support along
+    that normal; the other shape's point must project into the triangle i, j, m,
+    1e-7 * scale inside each edge (a face with more than three vertices, a quad of a
+    box-like mesh, is tested on that triangle only: a point that projects elsewhere in
+    the face fails the test, and GJK goes on).  Returns and results as
     _face_polish's."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)

@@ -649,6 +649,20 @@ def test_face_normal_minimum_is_exact(kind, cores):
         assert np.median(iters) <= (9 if kind == "convex" else 6)
 
 
+def _pressed_in(shape, ell, pe, shape_is_a, scale):
+    """GJK/EPA on ``shape`` (at the origin) and the ellipsoid ``ell`` at pose ``pe``,
+    either as A: the pair must penetrate, and its depth must not exceed the slow
+    oracle's direction search (both are upper bounds of the true depth).  Returns the
+    result, its normal turned out of ``shape`` and h_{shape - ell} along it."""
+    res = gjk(shape, ID, ell, pe) if shape_is_a else gjk(ell, pe, shape, ID)
+    assert res.status == ST_PENETRATING
+    want, _ = (O.signed_distance_oracle(shape, ID, ell, pe) if shape_is_a
+               else O.signed_distance_oracle(ell, pe, shape, ID))
+    assert res.distance >= want - 1e-9 * scale
+    n = np.asarray(res.normal) * (1.0 if shape_is_a else -1.0)
+    return res, n, O.cso_support(shape, ID, ell, pe, n[None])[0]
+
+
 @pytest.mark.parametrize("hull_is_a", [True, False])
 def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     # An ellipsoid pressed onto the ridge of a wedge (a convex hull whose top edge runs
@@ -657,8 +671,8 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     # x strictly between the two faces' normals), the crease search
     # (gjk_epa._hull_polish) lands on it: the normal is normal to the ridge to
     # round-off, the depth is h(n) of the pair, and the hull's witness lies on the
-    # ridge (within 1e-7 * scale: the search stops at a 1e-7 rad step, and the
-    # witnesses share the residual).  The ellipsoid is pressed in less than its
+    # ridge (within 1e-7 * scale: the search stops short of its minimum by a step
+    # below POLISH_STEP_DONE, and the witnesses share the residual).  The ellipsoid is pressed in less than its
     # rolling radius, so the cores stay apart and GJK solves the pair (EPA does not
     # search a hull's creases, see gjk_epa._hull_side); GJK alone ends within its
     # tolerance, its normal off the crease (before the search no pair's depth was h(n)
@@ -687,15 +701,8 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
         c = np.array([rng.uniform(-0.3, 0.3), rng.uniform(-0.02, 0.02), 0.5 - depth])
         c += sigma[:, 2] / low
         ell = {"type": "ellipsoid", "radii": radii.tolist()}
-        pe = pose(c, q)
-        res = gjk(wedge, ID, ell, pe) if hull_is_a else gjk(ell, pe, wedge, ID)
-        assert res.status == ST_PENETRATING
         scale = O.bounding_radius(wedge) + radii.max()
-        want, _ = (O.signed_distance_oracle(wedge, ID, ell, pe) if hull_is_a
-                   else O.signed_distance_oracle(ell, pe, wedge, ID))
-        assert res.distance >= want - 1e-9 * scale
-        n = np.asarray(res.normal) * (1.0 if hull_is_a else -1.0)     # out of the wedge
-        h = O.cso_support(wedge, ID, ell, pe, n[None])[0]
+        res, n, h = _pressed_in(wedge, ell, pose(c, q), hull_is_a, scale)
         assert abs(h + res.distance) <= 1e-8 * scale           # GJK's bound
         if abs(n[0]) <= 1e-12 and abs(abs(n[1]) - math.sin(slope)) <= 1e-12:
             on_face += 1                                # a side face's normal
@@ -709,16 +716,56 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     assert on_crease + on_face >= 48 and on_crease >= 40
 
 
+@pytest.mark.parametrize("cylinder_is_a", [True, False])
+def test_cylinder_side_minimum_on_the_crease_from_gjks_early_gap(cylinder_is_a):
+    # An ellipsoid pressed into a cylinder's side (axis z, away from the rims) by less
+    # than its rolling radius: the cores stay apart and GJK solves the pair.  The
+    # deepest direction is horizontal, on the crease of the cylinder's support function
+    # (its support there is a segment of the side), where GJK alone closes its gap
+    # slowly.  The crease search (gjk_epa._kink_polish) lands on it: the normal is
+    # horizontal to round-off and the depth is h(n) to 1e-12 * scale; the cylinder's
+    # witness lies on the side.  Once |v| proves that the shapes touch, GJK runs the
+    # search from the face test's gap (0.1 |v|^2) rather than from GJK_POLISH_TOL
+    # |v|^2: median 10 iterations with it, 15 without (measured 2026-11-26).  Depths
+    # are checked against the slow oracle's direction search as in the hull test above.
+    rng = np.random.default_rng(20)
+    cyl = {"type": "cylinder", "radius": 0.9, "height": 2.0}
+    iters = []
+    for _ in range(50):
+        radii = rng.uniform(0.15, 0.35, 3)
+        q = O.random_quats(rng, 1)[0]
+        r = O.quat_matrix(q)
+        sigma = r @ np.diag(radii ** 2) @ r.T
+        roll = radii.min() ** 2 / radii.max()
+        depth = roll * rng.uniform(0.2, 0.9)
+        phi = rng.uniform(0.0, 2.0 * math.pi)
+        u = np.array([math.cos(phi), math.sin(phi), 0.0])
+        # the ellipsoid's point farthest along -u at 0.9 - depth from the axis
+        c = (0.9 - depth) * u + sigma @ u / math.sqrt(u @ sigma @ u)
+        c[2] = rng.uniform(-0.5, 0.5)
+        ell = {"type": "ellipsoid", "radii": radii.tolist()}
+        scale = O.bounding_radius(cyl) + radii.max()
+        res, n, h = _pressed_in(cyl, ell, pose(c, q), cylinder_is_a, scale)
+        assert abs(n[2]) <= 1e-12
+        assert abs(h + res.distance) <= 1e-12 * scale           # depth == h(normal)
+        side = np.asarray(res.point_a if cylinder_is_a else res.point_b)
+        assert abs(math.hypot(side[0], side[1]) - 0.9) <= 1e-9 * scale
+        assert abs(side[2]) <= 1.0
+        iters.append(res.iterations)
+    assert np.median(iters) <= 12
+
+
 def test_newton_minimum_is_stationary():
-    # Newton's method (gjk_epa._newton_min_support) ends once its step is below
-    # POLISH_STEP_DONE (1e-7 rad): the normal it returns must be a stationary point of
-    # h = h_{A-B} on the unit sphere to that order.  The gradient of h there is the
-    # tangential part of the support point s of A - B along the normal, computed here
-    # by the numpy oracle; at the exact minimum it is zero.  Deep ellipsoid pairs, with
-    # their cores overlapping (EPA's Newton step) or apart (GJK's).  When written: p90
-    # |grad| 4.7e-10 * scale (2.8e-12 with the old 1e-9 rad stop), the largest 6.1e-7
-    # (a pair EPA closed by itself, 1e-8 * scale bounds); a stop 100x looser (1e-5 rad)
-    # gives a p90 of 6.5e-8, above this test's 1e-8.
+    # Newton's method (gjk_epa._newton_min_support) ends once the step it would take
+    # next is below POLISH_STEP_DONE (1e-6 rad): the normal it returns must be a
+    # stationary point of h = h_{A-B} on the unit sphere to that order (|grad| about
+    # h'' times the step, h'' ~ scale).  The gradient of h there is the tangential part
+    # of the support point s of A - B along the normal, computed here by the numpy
+    # oracle; at the exact minimum it is zero.  Deep ellipsoid pairs, with their cores
+    # overlapping (EPA's Newton step) or apart (GJK's).  Measured 2026-11-26: median
+    # |grad| 6.4e-8 * scale, p90 5.6e-7, the largest 1.4e-6 (h then within ~1e-12 *
+    # scale of its minimum).  Until session 20 the stop was 1e-7 rad after the step
+    # (p90 4.7e-10, the largest 6.1e-7, and one more support per polish).
     rng = np.random.default_rng(18)
     grads = []
     for _ in range(200):
@@ -742,4 +789,4 @@ def test_newton_minimum_is_stationary():
         assert abs(-(w @ n) - r.distance) <= 1e-12 * scale     # the depth is h(normal)
         grads.append(np.linalg.norm(w - (w @ n) * n) / scale)
     assert len(grads) >= 150
-    assert np.quantile(grads, 0.9) <= 1e-8 and max(grads) <= 1e-6
+    assert np.quantile(grads, 0.9) <= 1e-6 and max(grads) <= 5e-6

@@ -62,14 +62,15 @@ EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
 EPA_REL_TOL = 1e-8         # stop when support gain < tol * scale (dimensionless)
 EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the support gain
                            # < tol * scale, and once more at 0.01 * tol * scale if it gave up
-POLISH_STEP_DONE = 1e-7    # Newton's method and the crease search end once their step is
-                           # below this (rad): the direction is then within ~1e-7 rad of
-                           # the minimum and h within ~1e-14 * scale of it (until session
-                           # 18: 1e-9, one more support for nothing the tolerances see;
-                           # bench/ab_deep.py, deep pairs: ellipsoid-ellipsoid 17.8 ->
-                           # 16.5 GJK + EPA steps, 0.931x the time; ellipsoid-capsule
-                           # 0.949x, ellipsoid-cylinder 0.965x; the same statuses on
-                           # 100,000 cases per row, distances within 9.5e-9 * scale)
+POLISH_STEP_DONE = 1e-6    # Newton's method and the crease search end once the step they
+                           # would take next is below this (rad), at the point they are
+                           # at: the direction is then within ~1e-6 rad of the minimum and
+                           # h within ~1e-12 * scale of it.  Until session 18: 1e-9, until
+                           # session 20: 1e-7, and Newton's method took that last step (a
+                           # support for nothing the tolerances see; pure-Python counts,
+                           # deep pairs: ellipsoid-ellipsoid 16.6 -> 15.3 GJK + EPA
+                           # steps, ellipsoid-capsule 14.2 -> 13.3, ellipsoid-cylinder
+                           # 18.4 -> 17.7; figures in BENCHMARKS.md)
 EPA_POLISH_ITERS = 6       # its steps (support evaluations)
 EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
 EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther than this

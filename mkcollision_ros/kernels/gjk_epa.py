@@ -35,7 +35,11 @@ Phases of ``gjk_epa``
      ellipsoids.  Where that direction is near a crease of h (a cylinder's side, a
      capsule's core or a box's edges, _kink_side) the minimum along the crease is
      searched instead (_kink_polish, as in EPA below): apart, h is convex and any
-     local minimum below zero is the global one.  bench/deep_pairs.py, deep pairs
+     local minimum below zero is the global one.  Once |v| proves that the shapes
+     touch (so the exact distance is wanted), the crease search runs from the face
+     test's gap below (0.1 |v|^2): near a crease GJK's direction is within ~0.025 rad
+     of it by then, and GJK needed 4-7 more steps to reach GJK_POLISH_TOL (session
+     20; figures in BENCHMARKS.md).  bench/deep_pairs.py, deep pairs
      (many have an ellipsoid's cores apart): ellipsoid-box 2.94 -> 2.40 us (with
      EPA's search along the box's creases), ellipsoid-capsule 2.42 -> 1.87,
      ellipsoid-cylinder 3.21 -> 2.80, capsule-cylinder 2.71 -> 2.20 (with EPA's search
@@ -104,11 +108,13 @@ Phases of ``gjk_epa``
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
      least squares to nearby support points (EPA's face vertices with the directions
      they were found along, GJK's last supports, then its own steps).  Quadratic where
-     A - B is smooth and curved (ellipsoid cores): ~4 supports from a 1e-3 gap to a step
-     below POLISH_STEP_DONE (1e-7 rad; 1e-9 until session 18).  It gives up on kinks of h
-     (flat faces, edges, rims, segment cores), which is why only ellipsoid pairs try it
-     (cylinder pairs: kinks on every pair tried).  Measured on 500 random pairs per type
-     (process CPU per pair, one thread): ellipsoid-ellipsoid with overlapping cores
+     A - B is smooth and curved (ellipsoid cores): ~3 supports from a 1e-3 gap to a
+     step below POLISH_STEP_DONE (1e-6 rad; 1e-9 until session 18, 1e-7 until session
+     20, when it also became the step it would take next rather than the one taken).
+     It gives up on kinks of h (flat faces, edges, rims, segment cores), which is why
+     only ellipsoid pairs try it (cylinder pairs: kinks on every pair tried).  Measured
+     on 500 random pairs per type (process CPU per pair, one thread):
+     ellipsoid-ellipsoid with overlapping cores
      9.2 -> 5.9 us, cores apart 2.6 -> 1.6 us; against a run at EPA_REL_TOL 1e-11 on
      1500 pairs per type, normals within 3.8e-4 rad and distances within 1e-8 * scale,
      as before.
@@ -135,7 +141,7 @@ trustworthy; scale = sum of bounding radii):
     typically 1e-9; the residual is mostly coal's (its EPA stops early, often failing
     outright at tolerances below 1e-10).  Our own bound gap is < EPA_REL_TOL * scale =
     1e-8 * scale whenever EPA converges without Newton's method (with it: a stationary
-    point of h to a POLISH_STEP_DONE = 1e-7 rad step, and the cap test) (EPA_REL_TOL was
+    point of h to a POLISH_STEP_DONE = 1e-6 rad step, and the cap test) (EPA_REL_TOL was
     1e-10 until 2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x
     inside the issue's 1e-6 * scale; the normal of a smooth contact is then within
     ~sqrt(2e-8) ~ 1.4e-4 rad of the exact one, its support value within 1e-8 * scale of
@@ -489,11 +495,13 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
     ``stop`` (m, may be inf): as soon as a support plane proves the distance > stop
     (v.w / |v| > stop), return _GJK_BOUND with that lower bound.
     ``polish`` True: once the duality gap is below 0.1 |v|^2, for a _face_pair, the
-    face test (_face_polish) where the direction is near a face normal; once it is below
-    GJK_POLISH_TOL |v|^2, the crease search or _newton_min_support from the current
-    direction with the last few supports as samples (ellipsoid cores: GJK needs ~25
-    steps to 1e-12 there), or between a convex hull and an ellipsoid the tests of the
-    hull's features (_hull_polish); on success return _GJK_POLISHED, else go on.
+    face test (_face_polish) where the direction is near a face normal, and, when |v|
+    < ``stop`` (the shapes touch), the crease search where it is near a crease; once
+    the gap is below GJK_POLISH_TOL |v|^2, the crease search or _newton_min_support
+    from the current direction with the last few supports as samples (ellipsoid
+    cores: GJK needs ~25 steps to 1e-12 there), or between a convex hull and an
+    ellipsoid the tests of the hull's features (_hull_polish); on success return
+    _GJK_POLISHED, else go on.
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND,
     the lower bound v.w / |v| for _GJK_BOUND, else 0).
     Inlined into its two callers: as a called function it took 0.3 us more per deep pair
@@ -545,6 +553,12 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
     # polish below), at most EPA_FACE_EVALS supports: a minimum it finds with h < 0 is
     # the global one (cores apart, h convex)
     face_left = EPA_FACE_EVALS if (polish and _face_pair(sa[0], sb[0])) else 0
+    # the crease search from the face test's gap (0.1 |v|^2) when |v| proves that the
+    # shapes touch (a distance they need exactly; contacts-mode pairs apart keep their
+    # early separation certificate): near a crease GJK's direction is within 0.025 rad
+    # of it by then, and the search ends GJK 4-7 steps before GJK_POLISH_TOL would
+    crease_early = polish
+    stop2 = stop * stop
     while it < GJK_MAX_ITERS:
         if vv <= zero2:
             flag = _GJK_OVERLAP
@@ -582,20 +596,23 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
                 PN[slot, c] = d[c] * inv
                 PW[slot, c] = w[c]
             nsamp += 1
-            if gap <= GJK_POLISH_TOL * vv:
-                polish = False
+            last = gap <= GJK_POLISH_TOL * vv
+            if last or (crease_early and vv < stop2):
+                polish = not last
                 # near a crease of h (a cylinder's side, a capsule's core, a box's
-                # edges: _kink_side), the minimum along it; else Newton's method where
-                # h is smooth.  Apart, h is convex and any local minimum below zero is
-                # the global one, so no basin test is needed
+                # edges: _kink_side), the minimum along it, from this gap on once the
+                # shapes are proved to touch; else, at GJK_POLISH_TOL, Newton's method
+                # where h is smooth.  Apart, h is convex and any local minimum below
+                # zero is the global one, so no basin test is needed
                 kc = _kink_side(sa, sb, r_ab, d[0] * inv, d[1] * inv, d[2] * inv, True)
                 k_pol = 0
                 if kc >= 0:
+                    crease_early = False
                     for c in range(3):
                         d[c] *= inv
                     k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
                                          kc // 3, kc % 3)
-                elif kc == -1 and _gjk_newton_pair(sa[0], sb[0]):
+                elif last and kc == -1 and _gjk_newton_pair(sa[0], sb[0]):
                     k_pol = _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
                                                min(nsamp, 4), d[0] * inv, d[1] * inv,
                                                d[2] * inv, w[0], w[1], w[2], wa[0], wa[1],
@@ -872,6 +889,17 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
     return ub
 
 
+@njit_inline
+def _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az):
+    """A minimum found by Newton's method into ws t3 rows 15-18: direction n, the
+    difference point w, the support points a of A and a - w of B."""
+    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    pd[0], pd[1], pd[2] = nx, ny, nz
+    pw[0], pw[1], pw[2] = wx, wy, wz
+    pwa[0], pwa[1], pwa[2] = ax, ay, az
+    pwb[0], pwb[1], pwb[2] = ax - wx, ay - wy, az - wz
+
+
 @njit_kernel
 def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, nz,
                         wx, wy, wz, ax, ay, az):
@@ -941,6 +969,12 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
         step = math.sqrt(s1 * s1 + s2 * s2)
         if not step <= EPA_POLISH_STEP:
             return -k_it
+        if k_it > 0 and step <= POLISH_STEP_DONE:
+            # the step it would take is below POLISH_STEP_DONE: the current point is
+            # within about that step of the minimum, h within ~h'' step^2 / 2 of it
+            # (no support spent on the step itself)
+            _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az)
+            return k_it
         PN[ns, 0], PN[ns, 1], PN[ns, 2] = nx, ny, nz
         PW[ns, 0], PW[ns, 1], PW[ns, 2] = wx, wy, wz
         ns += 1
@@ -958,11 +992,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
         nx, ny, nz, wx, wy, wz, h = mx, my, mz, qx, qy, qz, hn
         ax, ay, az = pax, pay, paz
         if step <= POLISH_STEP_DONE:
-            pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-            pd[0], pd[1], pd[2] = nx, ny, nz
-            pw[0], pw[1], pw[2] = wx, wy, wz
-            pwa[0], pwa[1], pwa[2] = ax, ay, az
-            pwb[0], pwb[1], pwb[2] = ax - wx, ay - wy, az - wz
+            _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az)
             return k_it + 1
     return -EPA_POLISH_ITERS
 
@@ -1203,12 +1233,6 @@ def _hull_side(ca, cb):
     return -1
 
 
-# what _hull_polish found near a direction: a vertex's region (one highest vertex, h
-# smooth), an edge's crease (searched), a face's normal (a minimum there), or nothing
-# to search (a hull of fewer than three vertices)
-_HULL_VERTEX, _HULL_EDGE, _HULL_FACE, _HULL_OTHER = 0, 1, 2, 3
-
-
 @njit_inline
 def _hull_dir(side, r_ab, dx, dy, dz):
     """The direction, in the hull's own frame, along which the hull on ``side`` gives
@@ -1242,9 +1266,9 @@ def _hull_top3(pts, dx, dy, dz):
 
 
 @njit_kernel
-def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
+def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
     """The minimum of h = h_{A-B} at a convex hull's feature near the unit direction d
-    (ws t3 row 8: GJK's direction), for a hull against an ellipsoid (_hull_side; the
+    (GJK's direction), for a hull against an ellipsoid (_hull_side; the
     hull on ``side``) with the cores apart: the face test on the face through the three
     highest vertices along d (_hull_face_test), else the search along the crease of the
     edge of the two highest.
@@ -1268,30 +1292,28 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
     cores apart h is convex, and a local minimum below zero is the global one (the
     caller checks the sign).
 
-    Returns (k, region): k the number of support evaluations, negated when no minimum
-    was found, results as _kink_polish's (ws t3 rows 15-18) when one was; region
-    _HULL_FACE (a minimum at the face's normal), _HULL_EDGE (the search ran),
-    _HULL_VERTEX (d far from every edge's crease: h is smooth there, the caller tries
-    Newton's method), _HULL_OTHER (a hull of fewer than three vertices)."""
+    Returns (k, vertex): k the number of support evaluations, negated when no minimum
+    was found, results as _kink_polish's (ws t3 rows 15-18) when one was; vertex True
+    when d is in a vertex's region (no face minimum there and far from every edge's
+    crease: h is smooth there, and the caller tries Newton's method)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     fs = ws[0]
-    d = fs[_T3 + 8]
     v0 = sa[2] if side == 0 else sb[2]
     vn = sa[3] if side == 0 else sb[3]
     if vn < 3:
-        return 0, _HULL_OTHER
+        return 0, False
     pts = verts[v0:v0 + vn]
-    hx, hy, hz = _hull_dir(side, r_ab, d[0], d[1], d[2])
+    hx, hy, hz = _hull_dir(side, r_ab, dx, dy, dz)
     i, j, m, p1, p2, _ = _hull_top3(pts, hx, hy, hz)
     k_f = _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m,
                           hx, hy, hz)
     if k_f > 0:
-        return 1, _HULL_FACE
+        return 1, False
     ex, ey, ez = pts[i, 0] - pts[j, 0], pts[i, 1] - pts[j, 1], pts[i, 2] - pts[j, 2]
     le = math.sqrt(ex * ex + ey * ey + ez * ez)
     if not (le > 1e-9 * scale and p1 - p2 < EPA_KINK_NEAR * le):
-        return k_f, _HULL_VERTEX
+        return k_f, True
     # the edge's direction (from j to i) in A's frame
     ex, ey, ez = ex / le, ey / le, ez / le
     if side == 0:
@@ -1300,16 +1322,16 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
         kx = r_ab[0, 0] * ex + r_ab[0, 1] * ey + r_ab[0, 2] * ez
         ky = r_ab[1, 0] * ex + r_ab[1, 1] * ey + r_ab[1, 2] * ez
         kz = r_ab[2, 0] * ex + r_ab[2, 1] * ey + r_ab[2, 2] * ez
-    r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, d[0], d[1], d[2])
+    r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz)
     ok, nev, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz = r
     nev += abs(k_f)
     if not (ok and hu <= hlow + 1e-12 * scale):
-        return -nev, _HULL_EDGE
+        return -nev, False
     # the edge still the support along u
     hx, hy, hz = _hull_dir(side, r_ab, ux, uy, uz)
     i2, j2, _, q1, _, q3 = _hull_top3(pts, hx, hy, hz)
     if not (((i2 == i and j2 == j) or (i2 == j and j2 == i)) and q3 < q1 - 1e-12 * scale):
-        return -nev, _HULL_EDGE
+        return -nev, False
     # slide the hull's point along the edge to cancel w's part along it; it must stay
     # on the edge (between j and i)
     s = (pax - pbx) * kx + (pay - pby) * ky + (paz - pbz) * kz
@@ -1324,13 +1346,13 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side):
                 - (r_ab[1, 0] * jx + r_ab[1, 1] * jy + r_ab[1, 2] * jz) * ky
                 - (r_ab[2, 0] * jx + r_ab[2, 1] * jy + r_ab[2, 2] * jz) * kz)
     if not (-1e-12 * scale <= tpar <= le + 1e-12 * scale):
-        return -nev, _HULL_EDGE
+        return -nev, False
     pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
     pd[0], pd[1], pd[2] = ux, uy, uz
     pw[0], pw[1], pw[2] = pax - pbx, pay - pby, paz - pbz
     pwa[0], pwa[1], pwa[2] = pax, pay, paz
     pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
-    return nev, _HULL_EDGE
+    return nev, False
 
 
 @njit_kernel
@@ -1719,21 +1741,18 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, n
                        wx, wy, wz, ax, ay, az):
     """GJK's polish near the end on cores apart, away from the creases _kink_side
     finds: _newton_min_support (same arguments and return), but between a convex hull
-    and an ellipsoid first the tests of the hull's features near n (_hull_polish,
-    which reads n from ws t3 row 8), Newton's method only in a vertex's region.  A
-    function of its own so that _gjk's loop, inlined into its callers, keeps the code
-    it had: with the hull's branch written into it, deep pairs of rows that never take
-    the branch took 4-7% more time (capsule-cylinder, cylinder-cylinder,
-    cylinder-convex, box-cylinder, sphere-convex; bench/ab_deep.py, identical
-    results)."""
+    and an ellipsoid first the tests of the hull's features near n (_hull_polish),
+    Newton's method only in a vertex's region.  A function of its own so that _gjk's
+    loop, inlined into its callers, keeps the code it had: with the hull's branch
+    written into it, deep pairs of rows that never take the branch took 4-7% more
+    time (capsule-cylinder, cylinder-cylinder, cylinder-convex, box-cylinder,
+    sphere-convex; bench/ab_deep.py, identical results)."""
     side = _hull_side(sa[0], sb[0])
     if side < 0:
         return _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns,
                                    nx, ny, nz, wx, wy, wz, ax, ay, az)
-    d = ws[0][_T3 + 8]
-    d[0], d[1], d[2] = nx, ny, nz
-    k, region = _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side)
-    if region != _HULL_VERTEX:
+    k, vertex = _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, nx, ny, nz)
+    if not vertex:
         return k
     kn = _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns,
                              nx, ny, nz, wx, wy, wz, ax, ay, az)

@@ -1554,7 +1554,7 @@ def _face_pair(ca, cb):
     return faced and round_
 
 
-@njit_kernel
+@njit_inline
 def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
     """Whether the minimum of h = h_{A-B} is exactly at the normal of a box's face or a
     cylinder's cap near the unit direction d (EPA's best face normal, within
@@ -1581,10 +1581,10 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
     cylinder's axis was kept 0.31 rad from a deeper one, 9e-4 * scale below it, in 1
     of 100,000 random ellipsoid-cylinder pairs; regression scene
     mkc_face_polish_wrong_basin_ellipsoid_cylinder).  A convex hull's faces:
-    _hull_face_test."""
-    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    ws = borrow_gjk_workspace(ws)
-    fs = ws[0]
+    _hull_face_test.
+
+    Inlined: only the test whether d is near a face normal, which fails at most of
+    the EPA steps it runs at; the face test itself is a call (_face_test)."""
     for side in range(2):
         code = sa[0] if side == 0 else sb[0]
         if code != BOX and code != CYLINDER:
@@ -1601,24 +1601,35 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
                 k = axis
         if not cbest * cbest > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
             return 0
-        kx, ky, kz = _axis_of(side, k, r_ab)
-        s = sg * (1.0 if cbest > 0.0 else -1.0)
-        nx, ny, nz = s * kx, s * ky, s * kz
-        h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
-            sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz)
-        prm = sa[1] if side == 0 else sb[1]
-        eps = 1e-7 * scale
-        if code == BOX:
-            inside = ((k == 0 or abs(qx) <= prm[0] - eps)
-                      and (k == 1 or abs(qy) <= prm[1] - eps)
-                      and (k == 2 or abs(qz) <= prm[2] - eps))
-        else:
-            inside = prm[0] > eps and qx * qx + qy * qy <= (prm[0] - eps) ** 2
-        if not inside:
-            return -1
-        _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
-        return 1
+        return _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k,
+                          sg * (1.0 if cbest > 0.0 else -1.0))
     return 0
+
+
+@njit_kernel
+def _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k, s):
+    """_face_polish's test at the face normal s * axis k of the box or cylinder on
+    ``side`` (s = +-1): 1 if it is a minimum (results in ws t3 rows 15-18), else -1."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = borrow_gjk_workspace(ws)
+    fs = ws[0]
+    code = sa[0] if side == 0 else sb[0]
+    kx, ky, kz = _axis_of(side, k, r_ab)
+    nx, ny, nz = s * kx, s * ky, s * kz
+    h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
+        sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz)
+    prm = sa[1] if side == 0 else sb[1]
+    eps = 1e-7 * scale
+    if code == BOX:
+        inside = ((k == 0 or abs(qx) <= prm[0] - eps)
+                  and (k == 1 or abs(qy) <= prm[1] - eps)
+                  and (k == 2 or abs(qz) <= prm[2] - eps))
+    else:
+        inside = prm[0] > eps and qx * qx + qy * qy <= (prm[0] - eps) ** 2
+    if not inside:
+        return -1
+    _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
+    return 1
 
 
 @njit_kernel

@@ -1355,6 +1355,9 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
     return nev, False
 
 
+_SIN_CAP = math.sin(EPA_POLISH_CAP)
+
+
 @njit_kernel
 def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     """Minimum of h(u) = h_{A-B}(u) over the great circle of directions normal to the
@@ -1381,10 +1384,11 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     crease), for a box, no face normal within EPA_POLISH_CAP of the minimum deeper (the
     crease's circle passes through four of them, where h has kinks the secant does not
     see), and, when the other shape is a cylinder too, nothing nearby is deeper: the
-    minimum along its crease
-    (searched from d as well; the deeper of the two converged minima is the candidate,
-    and a search that gave up but went deeper rejects it) and the point kinks of
-    _kink_points.  Where two creases pass close
+    minimum along its crease (searched from d as well where that crease passes within
+    EPA_POLISH_CAP of the first search's minimum, as farther the basin test covers it;
+    the deeper of the two converged minima is the candidate, and a search that gave up
+    but went deeper rejects it) and the point kinks of _kink_points.  Where two creases
+    pass close
     by, each has a minimum of its own (measured before this check: 4 of 40,000 deep
     random cylinder-cylinder and capsule-cylinder pairs whose kept minimum was up to
     4.3e-4 * scale shallower than the deepest direction, on the other crease 0.13-0.29
@@ -1403,8 +1407,11 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, d[0], d[1], d[2])
     nev = r[1]
     both = sa[0] == CYLINDER and sb[0] == CYLINDER
-    if both:
-        ox, oy, oz = _axis_of(1 - side, 2, r_ab)
+    ox, oy, oz = _axis_of(1 - side, 2, r_ab)
+    # the other cylinder's crease is searched only where it passes within the basin cap
+    # (EPA_POLISH_CAP) of the minimum found: farther, _polish_is_global's test covers
+    # it (cylinder-cylinder deep pairs 20.5 -> 19.8 steps, pure-Python count)
+    if both and not (r[0] and abs(r[4] * ox + r[5] * oy + r[6] * oz) > _SIN_CAP):
         r2 = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, ox, oy, oz,
                          d[0], d[1], d[2])
         nev += r2[1]

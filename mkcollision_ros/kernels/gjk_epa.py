@@ -890,14 +890,15 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
 
 
 @njit_inline
-def _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az):
-    """A minimum found by Newton's method into ws t3 rows 15-18: direction n, the
-    difference point w, the support points a of A and a - w of B."""
+def _store_min(fs, nx, ny, nz, wx, wy, wz, ax, ay, az, bx, by, bz):
+    """A minimum found by a polish (Newton's method, the crease searches, the face
+    tests) into ws t3 rows 15-18: direction n, the difference point w, the witnesses
+    a on A and b on B."""
     pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
     pd[0], pd[1], pd[2] = nx, ny, nz
     pw[0], pw[1], pw[2] = wx, wy, wz
     pwa[0], pwa[1], pwa[2] = ax, ay, az
-    pwb[0], pwb[1], pwb[2] = ax - wx, ay - wy, az - wz
+    pwb[0], pwb[1], pwb[2] = bx, by, bz
 
 
 @njit_kernel
@@ -973,7 +974,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
             # the step it would take is below POLISH_STEP_DONE: the current point is
             # within about that step of the minimum, h within ~h'' step^2 / 2 of it
             # (no support spent on the step itself)
-            _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az)
+            _store_min(fs, nx, ny, nz, wx, wy, wz, ax, ay, az, ax - wx, ay - wy, az - wz)
             return k_it
         PN[ns, 0], PN[ns, 1], PN[ns, 2] = nx, ny, nz
         PW[ns, 0], PW[ns, 1], PW[ns, 2] = wx, wy, wz
@@ -992,7 +993,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
         nx, ny, nz, wx, wy, wz, h = mx, my, mz, qx, qy, qz, hn
         ax, ay, az = pax, pay, paz
         if step <= POLISH_STEP_DONE:
-            _take_newton(fs, nx, ny, nz, wx, wy, wz, ax, ay, az)
+            _store_min(fs, nx, ny, nz, wx, wy, wz, ax, ay, az, ax - wx, ay - wy, az - wz)
             return k_it + 1
     return -EPA_POLISH_ITERS
 
@@ -1347,11 +1348,8 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
                 - (r_ab[2, 0] * jx + r_ab[2, 1] * jy + r_ab[2, 2] * jz) * kz)
     if not (-1e-12 * scale <= tpar <= le + 1e-12 * scale):
         return -nev, False
-    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-    pd[0], pd[1], pd[2] = ux, uy, uz
-    pw[0], pw[1], pw[2] = pax - pbx, pay - pby, paz - pbz
-    pwa[0], pwa[1], pwa[2] = pax, pay, paz
-    pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+    _store_min(fs, ux, uy, uz, pax - pbx, pay - pby, paz - pbz, pax, pay, paz, pbx, pby,
+               pbz)
     return nev, False
 
 
@@ -1450,11 +1448,8 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
         nev += nk
         if found:
             return -nev
-    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-    pd[0], pd[1], pd[2] = ux, uy, uz
-    pw[0], pw[1], pw[2] = pax - pbx, pay - pby, paz - pbz
-    pwa[0], pwa[1], pwa[2] = pax, pay, paz
-    pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+    _store_min(fs, ux, uy, uz, pax - pbx, pay - pby, paz - pbz, pax, pay, paz, pbx, pby,
+               pbz)
     return nev
 
 
@@ -1538,15 +1533,12 @@ def _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz):
     """Store the minimum at a face's normal n (ws t3 rows 15-18: direction, difference
     point h n, witnesses on A and B): the other shape's point, and on the face that
     point moved onto the face's plane."""
-    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-    pd[0], pd[1], pd[2] = nx, ny, nz
-    pw[0], pw[1], pw[2] = h * nx, h * ny, h * nz
     if side == 0:
-        pwa[0], pwa[1], pwa[2] = pbx + h * nx, pby + h * ny, pbz + h * nz
-        pwb[0], pwb[1], pwb[2] = pbx, pby, pbz
+        _store_min(fs, nx, ny, nz, h * nx, h * ny, h * nz, pbx + h * nx, pby + h * ny,
+                   pbz + h * nz, pbx, pby, pbz)
     else:
-        pwa[0], pwa[1], pwa[2] = pax, pay, paz
-        pwb[0], pwb[1], pwb[2] = pax - h * nx, pay - h * ny, paz - h * nz
+        _store_min(fs, nx, ny, nz, h * nx, h * ny, h * nz, pax, pay, paz, pax - h * nx,
+                   pay - h * ny, paz - h * nz)
 
 
 @njit_inline

@@ -172,6 +172,7 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         POLISH_STEP_DONE, SPHERE,
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
+from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -218,6 +219,7 @@ _PN = _VD + _NVMAX
 _PW = _PN + _PK
 _FN = _PW + _PK
 _FS_ROWS = _FN + EPA_MAX_FACES
+_BC_ROWS = BC_MAX_LEVEL + 8   # boxcyl's scratch, in the EPA vertex rows (free then)
 _LAM, _LAMP, _L3, _VOL, _RES, _VV = 0, 4, 8, 11, 15, 25
 _FD = 28
 _FV_SIZE = _FD + EPA_MAX_FACES
@@ -2212,6 +2214,16 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
+    res = ws[1][_RES:_RES + 10]
+    if ((sa[0] == BOX and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == BOX)) \
+            and box_cylinder_depth(sa, sb, r_ab, t_ab, scale, fs[_V:_V + _BC_ROWS], res) > 0:
+        # a box and a cylinder whose cores overlap: the exact depth in closed form,
+        # certified, without GJK or EPA (boxcyl); else (apart, touching, or not
+        # certified) GJK and EPA as for any pair
+        for c in range(3):
+            pa[c] = res[4 + c] + ra * res[1 + c]
+            pb[c] = res[7 + c] - rb * res[1 + c]
+        return _set_out(out, -res[0] - ra - rb, res[1], res[2], res[3], pa, pb, 1, scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
                               ra + rb + max(cutoff, TOUCH_TOL * scale),
@@ -2296,7 +2308,6 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
                 pb[c] = pa[c] - ra * nrm[c] - rb * nrm[c]
             return _set_out(out, -(ra + rb), nrm[0], nrm[1], nrm[2], pa, pb, iters,
                             scale)
-    res = ws[1][_RES:_RES + 10]
     for c in range(10):
         res[c] = 0.0
     it, conv, gap, clean = _epa(sa, sb, verts, r_ab, t_ab, scale, ws, True)

@@ -289,7 +289,7 @@ def _circle_certified(A, c, e, r, hc, i, best, tol, stack, cand):
             else:
                 lw = min(w1 * ax + w2 * ay, w1 * bx + w2 * by)
             if lw + rmin >= lim:
-                continue
+                continue                # (the bound below, weaker: no square root)
             # the ellipse's least support over the arc: where |zeta . d| is largest
             ta, tb = zj * ax + zk * ay, zj * bx + zk * by
             if _in_arc(ax, ay, bx, by, zj, zk) or _in_arc(ax, ay, bx, by, -zj, -zk):

@@ -2166,6 +2166,17 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     return it
 
 
+@njit_inline
+def _core_out(out, res, ra, rb, pa, pb, iters, scale):
+    """The result row (_set_out) from a depth of the cores, res = [depth, n (3), pa (3),
+    pb (3)] in A's frame (EPA's or boxcyl's): the witnesses moved out by the inflation
+    radii ra, rb along n, the depth grown by ra + rb."""
+    for c in range(3):
+        pa[c] = res[4 + c] + ra * res[1 + c]
+        pb[c] = res[7 + c] - rb * res[1 + c]
+    return _set_out(out, -res[0] - ra - rb, res[1], res[2], res[3], pa, pb, iters, scale)
+
+
 @njit_kernel
 def gjk_epa(sa, sb, verts, r_ab, t_ab, out):
     """Signed distance of two convex shapes by GJK (apart or cores apart) and EPA (cores
@@ -2220,10 +2231,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # a box and a cylinder whose cores overlap: the exact depth in closed form,
         # certified, without GJK or EPA (boxcyl); else (apart, touching, or not
         # certified) GJK and EPA as for any pair
-        for c in range(3):
-            pa[c] = res[4 + c] + ra * res[1 + c]
-            pb[c] = res[7 + c] - rb * res[1 + c]
-        return _set_out(out, -res[0] - ra - rb, res[1], res[2], res[3], pa, pb, 1, scale)
+        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
                               ra + rb + max(cutoff, TOUCH_TOL * scale),
@@ -2316,10 +2324,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # witnesses off the best face, or the caps' pattern-searched bound (its support
         # points need not face each other: two coaxial cylinders of unequal heights)
         iters += _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res)
-    for c in range(3):
-        pa[c] = res[4 + c] + ra * res[1 + c]
-        pb[c] = res[7 + c] - rb * res[1 + c]
-    st = _set_out(out, -res[0] - ra - rb, res[1], res[2], res[3], pa, pb, iters, scale)
+    st = _core_out(out, res, ra, rb, pa, pb, iters, scale)
     # caps hit with a wide gap: still a contact when EPA's lower bound on the depth
     # (res[0] - gap, certified: the polytope lies inside A - B) alone proves
     # penetration; the depth reported is then the pattern-searched upper bound.  In the

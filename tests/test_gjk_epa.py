@@ -845,3 +845,79 @@ def test_box_cylinder_closed_form_depth_is_exact_and_global(cylinder_is_a):
         assert abs(O.surface_gap(a, pa_, out[k, OUT_PA:OUT_PA + 3], nrm)) <= 1e-9 * scale[k]
         assert abs(O.surface_gap(b, pb_, out[k, OUT_PB:OUT_PB + 3], -nrm)) <= 1e-9 * scale[k]
     assert exact >= 0.8 * pen.sum()
+
+
+@pytest.mark.parametrize("face_kind", ["cylinder", "box"])
+@pytest.mark.parametrize("other", ["point", "cylinder", "cone", "convex"])
+def test_face_basin_is_proved_against_any_shape(face_kind, other):
+    # The face test (gjk_epa._face_test) finds the normal n of a face of A (a
+    # cylinder's top cap, a box's top face) to be a local minimum of h = h_{A-B} when
+    # B's support
+    # point along -n projects into the face, and claims a cap around n (_face_basin:
+    # 2 atan(rin / h(n)), rin the radius of the largest disc about the foot inside the
+    # face) in which no direction is deeper: EPA keeps the minimum on that claim,
+    # whatever B is.  Checked here with the numpy oracle's h at directions inside the
+    # cap (half of them in its outer tenth), B at random poses and depths below the
+    # face.  Against a single point the bound is exact along the tilt toward the
+    # nearest side of the face, so there a direction 1.2 times farther out must be
+    # deeper: the claimed cap is the whole basin, not a fraction of it.
+    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.shapes import build_table
+    rng = np.random.default_rng(22)
+    face = ({"type": "box", "size": [2.0, 1.6, 1.0]} if face_kind == "box"
+            else {"type": "cylinder", "radius": 0.9, "height": 1.0})
+    top = 0.5
+    ws = G.make_gjk_workspace()
+    n = np.array([0.0, 0.0, 1.0])
+    found, wide, tight = 0, 0, 0
+    for _ in range(150):
+        if other == "point":
+            shape = {"type": "convex", "points": [[0.0, 0.0, 0.0]]}
+        elif other == "convex":
+            shape = {"type": "convex", "points": rng.normal(size=(12, 3)) * 0.3}
+            shape["points"] = shape["points"].tolist()
+        else:
+            shape = {"type": other, "radius": rng.uniform(0.2, 0.5),
+                     "height": rng.uniform(0.3, 0.8)}
+        q = O.random_quats(rng, 1)[0]
+        rb = O.quat_matrix(q)
+        low = rb @ O.support_np(shape, rb.T @ -n)           # B's point along -n, B at 0
+        foot = rng.uniform(-0.45, 0.45, 2)
+        depth = rng.uniform(0.02, 0.4)
+        if other == "point":
+            # nearer the rim and deeper: caps below 1.2 rad for the tightness check
+            a = rng.uniform(0.0, 2.0 * math.pi)
+            foot = rng.uniform(0.5, 0.85) * np.array([math.cos(a), math.sin(a)])
+            foot = foot if face_kind == "cylinder" else foot * [1.0, 0.8]
+            depth = rng.uniform(0.1, 0.9)
+        pos_b = np.array([foot[0], foot[1], top - depth]) - low
+        table = build_table([face, shape])
+        sa = (table.codes[0], table.params[0], table.vrange[0, 0], table.vrange[0, 1])
+        sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
+        scale = float(table.params[0, 7] + table.params[1, 7])
+        args = (sa, sb, table.verts, np.ascontiguousarray(rb), pos_b, True, scale, ws)
+        if G._face_test(*args, 0, 2, 1.0) <= 0:
+            continue
+        fs = ws[0]
+        assert np.allclose(fs[G._T3 + 15], n, atol=1e-12)
+        h0 = float(fs[G._T3 + 15] @ fs[G._T3 + 16])
+        assert abs(h0 - depth) <= 1e-12 * scale
+        cap = float(fs[G._T3 + 3, 0])
+        assert 0.0 < cap <= 1.5
+        found += 1
+        wide += cap >= 0.3
+        t = cap * np.concatenate([rng.uniform(0.0, 1.0, 200), rng.uniform(0.9, 1.0, 200)])
+        phi = rng.uniform(0.0, 2.0 * math.pi, 400)
+        u = np.stack([np.sin(t) * np.cos(phi), np.sin(t) * np.sin(phi), np.cos(t)], 1)
+        pb = (pos_b.tolist(), q.tolist())
+        h = O.cso_support(face, ID, shape, pb, u)
+        assert h.min() >= h0 - 1e-12 * scale
+        if other == "point" and face_kind == "cylinder" and cap < 1.2:
+            # tilt toward the nearest point of the rim, 1.2 times the cap
+            e = np.array([foot[0], foot[1], 0.0]) / np.linalg.norm(foot)
+            v = math.cos(1.2 * cap) * n + math.sin(1.2 * cap) * e
+            assert O.cso_support(face, ID, shape, pb, v[None])[0] < h0 - 1e-9 * scale
+            tight += 1
+    assert found >= 40 and wide >= 10
+    if other == "point" and face_kind == "cylinder":
+        assert tight >= 20

@@ -81,9 +81,8 @@ EPA_FACE_TOL = 1e-1         # test a box's face normal or a cylinder's axis with
                            # (gjk_epa._face_polish) once the support gain < tol * scale
 EPA_FACE_EVALS = 3         # at most this many supports for those tests per pair, in EPA
                            # and again in GJK on cores apart (gjk_epa._gjk)
-EPA_FACE_CAP = 0.1         # EPA_POLISH_CAP for a minimum found so (rad): at 0.5, 1 of 100,000
-                           # random ellipsoid-cylinder pairs kept one 0.31 rad from a
-                           # deeper one
+EPA_FACE_CAP_MAX = 1.5     # largest EPA_POLISH_CAP for a minimum found so (rad); the cap
+                           # itself is proved by the test (gjk_epa._face_basin)
 EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (gjk_epa._kink_polish)
                            # when the best face's normal n has |n . axis| below this (a
                            # box: for one of its axes only; near two, n is near a face

@@ -65,6 +65,12 @@ Phases of ``gjk_epa``
      convex around the hull's features, and their local minima lie as close as 0.03
      rad (regression scene mkc_hull_face_polish_wrong_basin_ellipsoid_convex); with the
      minima kept only where h is convex, EPA gained nothing (BENCHMARKS.md, session 19).
+     With the cap the face test proves (_face_basin), safe, EPA's test of the face of
+     the three highest vertices took fewer steps but more time (session 22,
+     bench/ab_deep.py against 3e90957, all pairs: ellipsoid-convex 1.067x,
+     cylinder-convex 1.150x: each try is passes over the hull's vertices; one try from
+     a gain of 1e-2 * scale saved 6% and 4% of the deep pairs' steps, pure-Python
+     count, about what the try costs).
   2. When the cores overlap (origin inside the GJK tetrahedron, or |v| <=
      EPA_DEGEN_TOL * scale), EPA on the *cores*: the full difference is the core one
      grown by a ball of radius r_a + r_b, so depth = core depth + r_a + r_b exactly.
@@ -94,11 +100,14 @@ Phases of ``gjk_epa``
      cylinder-cylinder pairs 5.2 -> 3.9 us,
      ellipsoid-cylinder 6.2 -> 4.4, ellipsoid-capsule 3.6 -> 3.4 (bench/deep_pairs.py;
      no depth on 100,000 deep random pairs per row off EPA's own by more than 1.2e-8 *
-     scale).  Between a box or a cylinder and a sphere or an ellipsoid, when the best
-     face's normal is near a box's face normal or a cylinder's axis, one support point
-     there tells whether that normal is a minimum (_face_polish: the other shape's
-     point projects into the face), from a gain of EPA_FACE_TOL * scale, with a cap of
-     EPA_FACE_CAP (regression scene mkc_face_polish_wrong_basin_ellipsoid_cylinder).
+     scale).  Between a box or a cylinder and a sphere or an ellipsoid, and between two
+     cylinders (_epa_face_pair), when the best face's normal is near a box's face
+     normal or a cylinder's axis, one support point there tells whether that normal is
+     a minimum (_face_polish: the other shape's point projects into the face), from a
+     gain of EPA_FACE_TOL * scale, and proves a cap around it with no deeper direction
+     (_face_basin), the cap of the test below (until session 22 a fixed 0.1 rad, and
+     no test between two cylinders; regression scene
+     mkc_face_polish_wrong_basin_ellipsoid_cylinder).
      A minimum whose cap test fails stays a candidate and is tested again at every
      later step as the polytope grows (until then EPA went on to the next try, 100x
      closer, ~10 steps later): it is taken as soon as the test passes, or dropped when
@@ -161,7 +170,7 @@ import math
 import numpy as np
 
 from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL,
-                        EPA_FACE_CAP, EPA_FACE_EVALS, EPA_FACE_TOL, EPA_FAIL_GAP,
+                        EPA_FACE_CAP_MAX, EPA_FACE_EVALS, EPA_FACE_TOL, EPA_FAIL_GAP,
                         EPA_KINK_CAP_BOX, EPA_KINK_CAP_CAPSULE, EPA_KINK_ITERS,
                         EPA_KINK_NEAR, EPA_KINK_STEP,
                         EPA_MAX_FACES, EPA_MAX_ITERS, EPA_POLISH_CAP,
@@ -201,7 +210,8 @@ from .jit import borrow, njit_inline, njit_kernel
 #      deep GJK/EPA pairs with a cylinder 7-10% faster as uint64, the same results).
 #      Mind numba's typing: int64 and uint64 unify to float64, so a variable that takes
 #      both (a slot index from ``free`` or from ``nf``) is cast with np.uint64.
-# t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 4-7 d, wa, wb, w of gjk_epa; 8-11
+# t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 3 (column 0) the cap a face test
+# proved (_face_basin); 4-7 d, wa, wb, w of gjk_epa; 8-11
 # d, wa, wb, w of _gjk / _grow_to_tetra / _epa; 12 v_prev (_gjk) or cin (_epa); 13-14
 # ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir
 # (_grow_to_tetra), then d, w, wa, wb of _newton_min_support's result; 19-24 d, wa, wb,
@@ -1545,21 +1555,32 @@ def _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz):
 
 @njit_inline
 def _face_pair(ca, cb):
-    """Whether EPA tries _face_polish on this pair of shape codes: a box or a cylinder
-    against a sphere or an ellipsoid (cores without kinks, so the face's own first-order
-    test below decides whether its normal is a minimum).  A convex hull's faces are
-    tested by _hull_polish, in GJK only and near its end (finding the face costs
-    passes over the hull's vertices)."""
+    """Whether GJK on cores apart tries _face_polish on this pair of shape codes: a box
+    or a cylinder against a sphere or an ellipsoid (until session 22 EPA's rule too,
+    now _epa_face_pair; against other shapes GJK's use is not measured).  A convex
+    hull's faces: _hull_polish, near GJK's end only."""
     faced = ca == BOX or ca == CYLINDER or cb == BOX or cb == CYLINDER
     round_ = ca == SPHERE or ca == ELLIPSOID or cb == SPHERE or cb == ELLIPSOID
     return faced and round_
 
 
 @njit_inline
+def _epa_face_pair(ca, cb):
+    """Whether EPA tries _face_polish on this pair of shape codes: a _face_pair (a box
+    or a cylinder against a sphere or an ellipsoid), or two cylinders.  The face
+    test's first-order rise and the basin it proves (_face_basin) hold whatever the
+    other shape (they use one point of it, not its smoothness), but against a box or
+    a convex hull the test cost more than it saved (bench/ab_deep.py against
+    3e90957, all pairs: box-convex 1.028x; cylinder-convex 1.150x with a hull's faces
+    tested as well, see _face_basin), and cones are not measured."""
+    return _face_pair(ca, cb) or (ca == CYLINDER and cb == CYLINDER)
+
+
+@njit_inline
 def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
     """Whether the minimum of h = h_{A-B} is exactly at the normal of a box's face or a
     cylinder's cap near the unit direction d (EPA's best face normal, within
-    EPA_KINK_NEAR rad of it), for a _face_pair.
+    EPA_KINK_NEAR rad of it), for a _face_pair (GJK) or an _epa_face_pair (EPA).
 
     Why: the deepest direction of an ellipsoid against a box lies on a face normal of
     the box in about half of the deep random pairs (measured: 511 of 960), and on a
@@ -1571,18 +1592,22 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
     the other shape's support point projects into the face (for a tangent t, the face
     adds max over the face of t . x, the other shape's point subtracts t . p): inside
     the face's rectangle, or the cap's disc, by 1e-7 * scale.  Then f is a local minimum
-    and the support point with its projection onto the face are the witnesses.
+    and the support point with its projection onto the face are the witnesses.  The
+    argument uses one point of the other shape, not its smoothness, so it holds
+    against any shape (the other shape's support being a whole segment or face, the
+    point found is one of it: then h rises faster still).
 
     Results as _newton_min_support's (ws t3 rows 15-18: direction, difference point,
     witnesses on A and B); returns 1 (the support evaluated) when f is a minimum, -1
     when the point projects outside the face, 0 when d is near no face normal.  In GJK
     on cores apart (h < 0 at f) the local minimum is the global one (h is convex
-    there).  EPA then applies _polish_is_global with the plane test under a cap of
-    EPA_FACE_CAP (another local minimum may lie close by: at 0.5 rad, a minimum on a
-    cylinder's axis was kept 0.31 rad from a deeper one, 9e-4 * scale below it, in 1
-    of 100,000 random ellipsoid-cylinder pairs; regression scene
-    mkc_face_polish_wrong_basin_ellipsoid_cylinder).  A convex hull's faces:
-    _hull_face_test.
+    there).  EPA then applies _polish_is_global with the plane test under the cap
+    the test proves (ws t3 row 3, _face_basin).  Another local minimum may lie close
+    by, so no fixed cap is safe: at 0.5 rad, a minimum on a cylinder's axis was kept
+    0.31 rad from a deeper one, 9e-4 * scale below it, in 1 of 100,000 random
+    ellipsoid-cylinder pairs (regression scene
+    mkc_face_polish_wrong_basin_ellipsoid_cylinder; then 0.1 rad until session 22).
+    A convex hull's faces: _hull_face_test.
 
     Inlined: only the test whether d is near a face normal, which fails at most of
     the EPA steps it runs at; the face test itself is a call (_face_test)."""
@@ -1601,7 +1626,7 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
                 cbest = c
                 k = axis
         if not cbest * cbest > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
-            return 0
+            continue
         return _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k,
                           sg * (1.0 if cbest > 0.0 else -1.0))
     return 0
@@ -1610,7 +1635,8 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
 @njit_kernel
 def _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k, s):
     """_face_polish's test at the face normal s * axis k of the box or cylinder on
-    ``side`` (s = +-1): 1 if it is a minimum (results in ws t3 rows 15-18), else -1."""
+    ``side`` (s = +-1): 1 if it is a minimum (results in ws t3 rows 15-18, the cap it
+    proves in row 3: _face_basin), else -1."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     fs = ws[0]
@@ -1620,17 +1646,47 @@ def _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k, s):
     h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
         sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz)
     prm = sa[1] if side == 0 else sb[1]
-    eps = 1e-7 * scale
+    # the radius of the largest disc about q's foot inside the face
     if code == BOX:
-        inside = ((k == 0 or abs(qx) <= prm[0] - eps)
-                  and (k == 1 or abs(qy) <= prm[1] - eps)
-                  and (k == 2 or abs(qz) <= prm[2] - eps))
+        rin = np.inf
+        if k != 0:
+            rin = min(rin, prm[0] - abs(qx))
+        if k != 1:
+            rin = min(rin, prm[1] - abs(qy))
+        if k != 2:
+            rin = min(rin, prm[2] - abs(qz))
     else:
-        inside = prm[0] > eps and qx * qx + qy * qy <= (prm[0] - eps) ** 2
-    if not inside:
+        rin = prm[0] - math.sqrt(qx * qx + qy * qy)
+    if not rin >= 1e-7 * scale:
         return -1
     _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
+    fs[_T3 + 3, 0] = _face_basin(rin, h)
     return 1
+
+
+@njit_inline
+def _face_basin(rin, h):
+    """The cap around a face's normal n (rad) in which no direction is deeper than n,
+    for a minimum of the face test with h = h(n) > 0 and a disc of radius rin about
+    the other shape's point's foot inside the face.
+
+    Why it holds: with F the face and p the other shape's support point (B's; for a
+    face of B, A's, with the signs turned), h_{A-B}(u) >= h_F(u) - p . u for every u,
+    since F lies in A and p in B.  F - p is a flat piece of the plane at height h
+    along n holding the disc of radius rin about the point h n, so h_{A-B}(u) >=
+    h cos t + rin sin t for u at angle t from n, which is >= h while tan(t / 2) <=
+    rin / h.  It holds for any other shape (no smoothness used); EPA takes it as the
+    cap of _polish_is_global's plane test (capped at EPA_FACE_CAP_MAX, inside the pi /
+    2 that test needs).  0 when h <= 0 (GJK on cores apart needs no cap).  Against a
+    single point the bound is exact along the tilt toward the face's nearest side, so
+    the cap is the whole basin there (tests/test_gjk_epa.py checks both).
+
+    The same holds on a convex hull's face (rin: the foot's least distance to the
+    triangle's edges); EPA's test of hull faces with it was measured slower, see the
+    module notes (session 22)."""
+    if not h > 0.0:
+        return 0.0
+    return min(2.0 * math.atan(rin / h), EPA_FACE_CAP_MAX)
 
 
 @njit_kernel
@@ -1891,7 +1947,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     p_fail = -1                         # a face that failed its last test
     # the test of a face normal (_face_polish): from a gain of EPA_FACE_TOL * scale, at
     # most EPA_FACE_EVALS supports
-    face_left = EPA_FACE_EVALS if _face_pair(sa[0], sb[0]) else 0
+    face_left = EPA_FACE_EVALS if _epa_face_pair(sa[0], sb[0]) else 0
     face_at = EPA_FACE_TOL * scale
     while True:
         # face closest to the origin
@@ -1931,9 +1987,11 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             face_left -= abs(k_f)
             n_pol += abs(k_f)
             if k_f > 0:
+                # a minimum in the cap _face_basin proves: the global one once no face
+                # of the polytope can reach deeper outside that cap
                 pend = True
                 p_planes = True
-                p_cap = EPA_FACE_CAP
+                p_cap = fs[_T3 + 3, 0]
                 p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
                 p_fail = -1
         if pend:

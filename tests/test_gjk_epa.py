@@ -852,11 +852,10 @@ def test_box_cylinder_closed_form_depth_is_exact_and_global(cylinder_is_a):
 def test_face_basin_is_proved_against_any_shape(face_kind, other):
     # The face test (gjk_epa._face_test) finds the normal n of a face of A (a
     # cylinder's top cap, a box's top face) to be a local minimum of h = h_{A-B} when
-    # B's support
-    # point along -n projects into the face, and claims a cap around n (_face_basin:
-    # 2 atan(rin / h(n)), rin the radius of the largest disc about the foot inside the
-    # face) in which no direction is deeper: EPA keeps the minimum on that claim,
-    # whatever B is.  Checked here with the numpy oracle's h at directions inside the
+    # B's support point along -n projects into the face, and claims a cap around n
+    # (_face_basin: 2 atan(rin / h(n)), rin the radius of the largest disc about the
+    # foot inside the face) in which no direction is deeper: EPA keeps the minimum on
+    # that claim, whatever B is.  Checked here with the numpy oracle's h at directions inside the
     # cap (half of them in its outer tenth), B at random poses and depths below the
     # face.  Against a single point the bound is exact along the tilt toward the
     # nearest side of the face, so there a direction 1.2 times farther out must be

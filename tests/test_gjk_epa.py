@@ -855,12 +855,13 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
     # B's support point along -n projects into the face, and claims a cap around n
     # (_face_basin: 2 atan(rin / h(n)), rin the radius of the largest disc about the
     # foot inside the face) in which no direction is deeper: EPA keeps the minimum on
-    # that claim, whatever B is.  Checked here with the numpy oracle's h at directions inside the
-    # cap (half of them in its outer tenth), B at random poses and depths below the
-    # face.  Against a single point the bound is exact along the tilt toward the
+    # that claim, whatever B is.  Checked here with the numpy oracle's h at directions
+    # inside the cap (half of them in its outer tenth), B at random poses and depths
+    # below the face.  Against a single point the bound is exact along the tilt toward the
     # nearest side of the face, so there a direction 1.2 times farther out must be
     # deeper: the claimed cap is the whole basin, not a fraction of it.
     from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels.constants import EPA_FACE_CAP_MAX
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(22)
     face = ({"type": "box", "size": [2.0, 1.6, 1.0]} if face_kind == "box"
@@ -873,8 +874,7 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
         if other == "point":
             shape = {"type": "convex", "points": [[0.0, 0.0, 0.0]]}
         elif other == "convex":
-            shape = {"type": "convex", "points": rng.normal(size=(12, 3)) * 0.3}
-            shape["points"] = shape["points"].tolist()
+            shape = {"type": "convex", "points": (rng.normal(size=(12, 3)) * 0.3).tolist()}
         else:
             shape = {"type": other, "radius": rng.uniform(0.2, 0.5),
                      "height": rng.uniform(0.3, 0.8)}
@@ -902,7 +902,7 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
         h0 = float(fs[G._T3 + 15] @ fs[G._T3 + 16])
         assert abs(h0 - depth) <= 1e-12 * scale
         cap = float(fs[G._T3 + 3, 0])
-        assert 0.0 < cap <= 1.5
+        assert 0.0 < cap <= EPA_FACE_CAP_MAX
         found += 1
         wide += cap >= 0.3
         t = cap * np.concatenate([rng.uniform(0.0, 1.0, 200), rng.uniform(0.9, 1.0, 200)])

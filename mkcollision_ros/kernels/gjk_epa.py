@@ -1534,10 +1534,7 @@ def _face_point(sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz):
     if side == 0:
         qx, qy, qz = pbx, pby, pbz
     else:
-        ox, oy, oz = pax - t_ab[0], pay - t_ab[1], paz - t_ab[2]
-        qx = r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz
-        qy = r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz
-        qz = r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz
+        qx, qy, qz = _in_side_frame(1, r_ab, t_ab, pax, pay, paz)
     return h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz
 
 
@@ -1714,16 +1711,22 @@ def _hull_edge_on_top(sa, sb, verts, r_ab, t_ab, scale, side, px, py, pz, nx, ny
     vn = sa[3] if side == 0 else sb[3]
     pts = verts[v0:v0 + vn]
     hx, hy, hz = _hull_dir(side, r_ab, nx, ny, nz)
-    qx, qy, qz = _hull_point(side, r_ab, t_ab, px, py, pz)
-    top = hx * qx + hy * qy + hz * qz + 1e-12 * scale
-    for q in range(vn):
+    qx, qy, qz = _in_side_frame(side, r_ab, t_ab, px, py, pz)
+    return _none_above(pts, hx, hy, hz, hx * qx + hy * qy + hz * qz + 1e-12 * scale)
+
+
+@njit_inline
+def _none_above(pts, hx, hy, hz, top):
+    """Whether no point of pts (n, 3) lies above the height ``top`` along (hx, hy,
+    hz): one pass."""
+    for q in range(pts.shape[0]):
         if hx * pts[q, 0] + hy * pts[q, 1] + hz * pts[q, 2] > top:
             return False
     return True
 
 
 @njit_inline
-def _hull_point(side, r_ab, t_ab, x, y, z):
+def _in_side_frame(side, r_ab, t_ab, x, y, z):
     """A point of A's frame in the frame of the shape on ``side``."""
     if side == 0:
         return x, y, z
@@ -1879,10 +1882,9 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, h
         j, m = m, j
     if not c * c > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
         return 0
-    top = nx * pts[i, 0] + ny * pts[i, 1] + nz * pts[i, 2] + 1e-12 * scale
-    for q in range(vn):
-        if nx * pts[q, 0] + ny * pts[q, 1] + nz * pts[q, 2] > top:
-            return 0
+    if not _none_above(pts, nx, ny, nz,
+                       nx * pts[i, 0] + ny * pts[i, 1] + nz * pts[i, 2] + 1e-12 * scale):
+        return 0
     # the face's outward normal is its normal in A's frame on A, minus it on B
     if side == 0:
         ux, uy, uz = nx, ny, nz

@@ -1019,3 +1019,60 @@ def test_crossing_basin_is_proved(other):
     assert found >= 60 and wide >= 10 and refused >= 20
     if other == "segment":
         assert tight >= 40
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "box"])
+def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
+    # gjk_epa._ball_certified ends EPA at a polished minimum h(n) when a ball of radius
+    # >= h(n) - tol about one shape's witness fits inside the other's core
+    # (_core_inradius): A - B then holds that ball about the origin, so no direction
+    # is shallower.  Checked here: the ball fits (its radius is at most h_A(u) - u . p
+    # along 4,000 random directions u and the shape's face and side normals, the
+    # numpy oracle's support function), it is the largest that fits (that minimum
+    # equals it), a point outside the core gets -inf, and the certificate accepts
+    # h(n) up to the radius + tol and refuses it just beyond.
+    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.shapes import build_table
+    rng = np.random.default_rng(24)
+    shape = ({"type": "cylinder", "radius": 0.4, "height": 1.5} if kind == "cylinder"
+             else {"type": "box", "size": [0.6, 1.0, 1.8]})
+    table = build_table([shape, {"type": "sphere", "radius": 0.1}])
+    sa = (table.codes[0], table.params[0], table.vrange[0, 0], table.vrange[0, 1])
+    sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
+    ws = G.make_gjk_workspace()
+    fs = ws[0]
+    u = rng.normal(size=(4000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    tol = 1e-8
+    inside = outside = 0
+    for trial in range(60):
+        p = rng.uniform(-1.0, 1.0, 3) * (0.45, 0.55, 0.95)
+        rot = np.ascontiguousarray(O.quat_matrix(O.random_quats(rng, 1)[0]))
+        t_ab = rng.normal(size=3)
+        # B's point p of its own frame, in A's: the test converts it back
+        x = rot @ p + t_ab
+        rho = G._core_inradius(1, sb, sa, rot, t_ab, x[0], x[1], x[2])
+        if kind == "cylinder":
+            k = np.array([p[0], p[1], 0.0]) / max(math.hypot(p[0], p[1]), 1e-300)
+            normals = np.array([k, (0, 0, 1.0), (0, 0, -1.0)])
+        else:
+            normals = np.vstack([np.eye(3), -np.eye(3)])
+        gaps = [O.support_value(shape, v) - float(v @ p) for v in np.vstack([u, normals])]
+        if min(gaps) < 0.0:
+            assert rho == -np.inf
+            outside += 1
+            continue
+        inside += 1
+        assert rho <= min(gaps) + 1e-12
+        assert rho >= min(gaps) - 1e-12
+        # the certificate on a stored minimum (n, w = a - b = h n, a, b): A's witness a
+        # is the point inside B, the shape
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        for h, expect in ((rho + 0.99 * tol, True), (rho + 1.01 * tol, False)):
+            fs[G._T3 + 15] = n
+            fs[G._T3 + 16] = h * n
+            fs[G._T3 + 17] = x
+            fs[G._T3 + 18] = x - h * n
+            assert G._stored_certified(sb, sa, rot, t_ab, fs, tol) == expect
+    assert inside >= 15 and outside >= 15

@@ -1406,8 +1406,13 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  EPA
     then applies _polish_is_global as to Newton's method; GJK on cores apart needs no
     such test (h is convex there: a minimum on the sphere below zero is the global
-    one).  Results as _newton_min_support's (ws t3 rows 15-18: direction, difference
-    point, witnesses on A and B, the cylinder's one slid to that point); returns the
+    one).  None of those checks is needed when the first search's minimum is the
+    depth by _ball_certified (a witness with a ball of radius h inside the other
+    shape's core): the search ends there (session 24: deep cylinder-cylinder pairs 17.0
+    -> 16.0 GJK + EPA steps with the certificate, pure-Python count).  Results as
+    _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
+    A and B, the cylinder's one slid to that point), stored only when it succeeds (a
+    minimum EPA holds pending its basin test stays there otherwise); returns the
     number of support evaluations, negated when it gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
@@ -1417,6 +1422,15 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     kx, ky, kz = _axis_of(side, axis, r_ab)
     r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, d[0], d[1], d[2])
     nev = r[1]
+    if r[0]:
+        # the depth itself (_ball_certified): no other crease or kink can be deeper
+        ok, pax, pay, paz, pbx, pby, pbz = _crease_slid(sa, sb, t_ab, scale, r, side, axis,
+                                                        kx, ky, kz)
+        if ok and _ball_certified(sa, sb, r_ab, t_ab, r[3] - tol, pax, pay, paz, pbx, pby,
+                                  pbz):
+            _store_min(fs, r[4], r[5], r[6], pax - pbx, pay - pby, paz - pbz, pax, pay,
+                       paz, pbx, pby, pbz)
+            return nev
     both = sa[0] == CYLINDER and sb[0] == CYLINDER
     ox, oy, oz = _axis_of(1 - side, 2, r_ab)
     # the other cylinder's crease is searched only where it passes within the basin cap
@@ -1432,25 +1446,14 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
             kx, ky, kz = ox, oy, oz
         if r[0] and r2[2] < r[3] - tol:
             return -nev                 # the other search went deeper without converging
-    ok, _, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz = r
-    if not (ok and hu <= hlow + 1e-12 * scale):
+    if not r[0]:
         return -nev
-    # slide the cylinder's (capsule's, box's) point along its axis to cancel w's
-    # axial part; it must stay on the side (segment, edge)
-    s = -((pax - pbx) * kx + (pay - pby) * ky + (paz - pbz) * kz)
-    if side == 0:
-        pax, pay, paz = pax + s * kx, pay + s * ky, paz + s * kz
-        ax_ = pax * kx + pay * ky + paz * kz
-        box = sa[0] == BOX
-        hh = sa[1][axis] if box else sa[1][1]
-    else:
-        pbx, pby, pbz = pbx - s * kx, pby - s * ky, pbz - s * kz
-        ax_ = (pbx - t_ab[0]) * kx + (pby - t_ab[1]) * ky + (pbz - t_ab[2]) * kz
-        box = sb[0] == BOX
-        hh = sb[1][axis] if box else sb[1][1]
-    if not abs(ax_) <= hh + 1e-12 * scale:
+    ok, pax, pay, paz, pbx, pby, pbz = _crease_slid(sa, sb, t_ab, scale, r, side, axis,
+                                                    kx, ky, kz)
+    if not ok:
         return -nev
-    if box:
+    hu, ux, uy, uz = r[3], r[4], r[5], r[6]
+    if (sa[0] if side == 0 else sb[0]) == BOX:
         found, nk = _box_faces_deeper(sa, sb, verts, r_ab, t_ab, core, side, axis,
                                       ux, uy, uz, hu - tol)
         nev += nk
@@ -1464,6 +1467,30 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     _store_min(fs, ux, uy, uz, pax - pbx, pay - pby, paz - pbz, pax, pay, paz, pbx, pby,
                pbz)
     return nev
+
+
+@njit_inline
+def _crease_slid(sa, sb, t_ab, scale, r, side, axis, kx, ky, kz):
+    """_kink_polish's witnesses for the minimum r of _crease_min along the crease of the
+    shape on ``side`` (axis k): (ok, a (3), b (3)).  The cylinder's (capsule's, box's)
+    point slides along its axis to cancel w's axial part, so that a - b = h u; ok when
+    h there is the lowest the search evaluated and the point stays on the side
+    (segment, edge), within +-prm[1] along the axis (a box: +-prm[axis]): then h rises
+    on both sides of the crease."""
+    hlow, hu = r[2], r[3]
+    pax, pay, paz, pbx, pby, pbz = r[7], r[8], r[9], r[10], r[11], r[12]
+    if not hu <= hlow + 1e-12 * scale:
+        return False, pax, pay, paz, pbx, pby, pbz
+    s = -((pax - pbx) * kx + (pay - pby) * ky + (paz - pbz) * kz)
+    if side == 0:
+        pax, pay, paz = pax + s * kx, pay + s * ky, paz + s * kz
+        ax_ = pax * kx + pay * ky + paz * kz
+        hh = sa[1][axis] if sa[0] == BOX else sa[1][1]
+    else:
+        pbx, pby, pbz = pbx - s * kx, pby - s * ky, pbz - s * kz
+        ax_ = (pbx - t_ab[0]) * kx + (pby - t_ab[1]) * ky + (pbz - t_ab[2]) * kz
+        hh = sb[1][axis] if sb[0] == BOX else sb[1][1]
+    return abs(ax_) <= hh + 1e-12 * scale, pax, pay, paz, pbx, pby, pbz
 
 
 @njit_inline
@@ -1734,6 +1761,60 @@ def _in_side_frame(side, r_ab, t_ab, x, y, z):
     return (r_ab[0, 0] * ox + r_ab[1, 0] * oy + r_ab[2, 0] * oz,
             r_ab[0, 1] * ox + r_ab[1, 1] * oy + r_ab[2, 1] * oz,
             r_ab[0, 2] * ox + r_ab[1, 2] * oy + r_ab[2, 2] * oz)
+
+
+@njit_inline
+def _core_inradius(side, sa, sb, r_ab, t_ab, x, y, z):
+    """The radius of a ball about the point x (A's frame) inside the core of the shape
+    on ``side``: a cylinder's (its radius less x's distance from the axis, or its
+    half-height less |x_z|, the smaller) or a box's (the least gap to its faces); -inf
+    where x lies outside that core and for every other shape (a sphere's or a
+    capsule's core, a point or a segment, holds no ball; an ellipsoid's core has no
+    closed form for it, and a hull's would need its face planes)."""
+    code = sa[0] if side == 0 else sb[0]
+    prm = sa[1] if side == 0 else sb[1]
+    if code != CYLINDER and code != BOX:
+        return -np.inf
+    px, py, pz = _in_side_frame(side, r_ab, t_ab, x, y, z)
+    if code == CYLINDER:
+        r = min(prm[0] - math.sqrt(px * px + py * py), prm[1] - abs(pz))
+    else:
+        r = min(prm[0] - abs(px), min(prm[1] - abs(py), prm[2] - abs(pz)))
+    return r if r >= 0.0 else -np.inf
+
+
+@njit_kernel
+def _ball_certified(sa, sb, r_ab, t_ab, hmin, ax, ay, az, bx, by, bz):
+    """Whether a direction n with h(n) = hmin + tol and witnesses a (on A's core) and b
+    (on B's) gives the depth, within tol, with no test of EPA's polytope: true when a
+    ball about b inside A's core, or about a inside B's core (_core_inradius), has a
+    radius of at least hmin.
+
+    Why it holds: if the ball of radius rho about a point b of B lies in A, then A - B
+    holds the ball of radius rho about the origin (that ball minus b), so h(u) >= rho
+    along every unit u: the depth, min_u h(u), is at least rho, and at most h(n).  So
+    no test of the polytope is needed, nor that n is a local minimum, whatever creases
+    and faces the shapes have nearby.  (On the cores, as EPA runs: a core's point b,
+    and the ball inside the other core.)  It applies where the depth is small beside
+    the containing shape's size (a ball of radius h(n) must fit): of the deep pairs of
+    bench.common.pair_cases (depth > 1e-3 * scale, up to ~0.6 * scale; pure-Python
+    count, 400 cases, seed 5) it took 81 of 190 cylinder-cylinder pairs and 27 of 193
+    cylinder-convex ones (the face and crossing tests' minima and the crease search's).
+    The crease search taken sooner for it (from a gain of 1e-2 * scale) took more
+    steps where only certified minima were kept, and was wrong where the basin test
+    kept the others (BENCHMARKS.md session 24; regression scene
+    mkc_early_crease_search_wrong_basin_ellipsoid_cylinder)."""
+    if _core_inradius(0, sa, sb, r_ab, t_ab, bx, by, bz) >= hmin:
+        return True
+    return _core_inradius(1, sa, sb, r_ab, t_ab, ax, ay, az) >= hmin
+
+
+@njit_inline
+def _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
+    """_ball_certified on the minimum a polish stored (ws t3 rows 15-18: n, w, a, b)."""
+    n, w, a, b = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    return _ball_certified(sa, sb, r_ab, t_ab, _dot(n, w) - tol, a[0], a[1], a[2], b[0],
+                           b[1], b[2])
 
 
 @njit_inline
@@ -2165,6 +2246,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 p_cap = fs[_T3 + 3, 0]
                 p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
                 p_fail = -1
+                if _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
+                    p_h = -np.inf       # the depth itself: no face can be deeper
         if pend:
             p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
                                        p_cap, p_fail)
@@ -2193,6 +2276,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                     p_planes = kc >= 0 or creaseless
                     p_cap = _polish_cap(kc, capsule, box)
                     p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
+                    if _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
+                        p_h = -np.inf
                     p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h,
                                                p_planes, p_cap, -1)
                     if p_fail < 0:

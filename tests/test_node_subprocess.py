@@ -65,8 +65,12 @@ def test_executable_with_config_file_answers_poses():
         pos[i1] = [0.0, 0.45, 3.0]
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(moving), 1))
         msg = msg_adapters.arrays_to_body_pose_array(moving, pos, quat, Time(sec=77))
+        # a liveness bound, not a speed figure: in a fresh clone the executable first
+        # compiles the pipeline's kernels (up to 6.5 min measured, README), and 480 s
+        # ran out once in a fresh-clone .ci/run on 2026-11-26 (the suite 13% slower
+        # than the day's earlier run)
         ok = h.spin_until(lambda: any(m.header.stamp.sec == 77 for m in got),
-                          timeout=480.0, step=lambda: pub.publish(msg))
+                          timeout=900.0, step=lambda: pub.publish(msg))
         assert ok, "no ContactArray from the executable:\n" + stop(proc)
         m = next(m for m in got if m.header.stamp.sec == 77)
         assert list(zip(m.body_a, m.body_b)) == [("ball_0", "ball_1")]

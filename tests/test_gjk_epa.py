@@ -696,9 +696,9 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     # below POLISH_STEP_DONE, and the witnesses share the residual).  The ellipsoid
     # is pressed in less than its rolling radius, so the cores stay apart and GJK
     # solves the pair (deeper, EPA: test_deep_hull_ridge_and_apex_against_exact_depths);
-    # GJK alone ends within its
-    # tolerance, its normal off the crease (before the search no pair's depth was h(n)
-    # to 1e-12 * scale with the normal on the crease; with it 50 of 50, when written).
+    # GJK alone ends within its tolerance, its normal off the crease (before the
+    # search no pair's depth was h(n) to 1e-12 * scale with the normal on the crease;
+    # with it 50 of 50, when written).
     # A pair whose minimum lies on a side face's normal instead counts as well (the
     # face test, _hull_face_test, finds it exactly).  Depths are checked against the
     # slow oracle's direction search (oracles.signed_distance_oracle), whose pattern

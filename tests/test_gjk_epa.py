@@ -1049,6 +1049,68 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
         assert tight >= 20
 
 
+def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
+    # EPA tests two cylinders' crossing face once, at its start, along the normal n of
+    # both axes with n . t >= 0 (gjk_epa._cylinders_crossing): h(+-n) = r_a + r_b -+
+    # n . t, and the foot of the origin lies at the same segment parameters on both
+    # faces, so where the lower face fails the other fails too.  Checked against
+    # _crossing_test along both signs (its general form, from a direction d), on random
+    # pairs of cylinders: the same minimum, witnesses and cap where it is taken; the
+    # other sign never a lower minimum; refused exactly where _crossing_test refuses
+    # both, on pairs not separated along n (EPA's: the origin inside A - B).
+    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.shapes import build_table
+    rng = np.random.default_rng(26)
+    ws = G.make_gjk_workspace()
+    fs = ws[0]
+    taken, refused = 0, 0
+    for trial in range(400):
+        ra, rb = rng.uniform(0.1, 0.6, 2)
+        ha, hb = rng.uniform(0.2, 2.0, 2)
+        table = build_table([{"type": "cylinder", "radius": ra, "height": ha},
+                             {"type": "cylinder", "radius": rb, "height": hb}])
+        sa = (table.codes[0], table.params[0], table.vrange[0, 0], table.vrange[0, 1])
+        sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
+        scale = float(table.params[0, 7] + table.params[1, 7])
+        q = rng.normal(size=4)
+        rot = np.ascontiguousarray(O.quat_matrix(q / np.linalg.norm(q)))
+        t_ab = rng.uniform(-0.6, 0.6, 3)
+        got = G._cylinders_crossing(sa, sb, rot, t_ab, scale, fs)
+        mine = fs[G._T3 + 15:G._T3 + 19].copy(), float(fs[G._T3 + 3, 0])
+        n = np.cross([0.0, 0.0, 1.0], rot[:, 2])
+        n /= np.linalg.norm(n)
+        if n @ t_ab < 0.0:
+            n = -n
+        ks, hs = [], []
+        for sgn in (1.0, -1.0):
+            d = sgn * n
+            k = G._crossing_test(sa, sb, table.verts, rot, t_ab, True, scale, ws, 0,
+                                 d[0], d[1], d[2])
+            ks.append(k)
+            hs.append(float(fs[G._T3 + 15] @ fs[G._T3 + 16]) if k == 1 else np.inf)
+            if sgn > 0 and k == 1:
+                theirs = fs[G._T3 + 15:G._T3 + 19].copy(), float(fs[G._T3 + 3, 0])
+        if ra + rb - n @ t_ab <= 0.0:
+            # n separates them: EPA never runs on such a pair (h > 0 everywhere there)
+            assert not got
+            continue
+        if not got:
+            assert ks[0] != 1 and ks[1] != 1
+            refused += 1
+            continue
+        taken += 1
+        assert ks[0] == 1 and hs[1] >= hs[0]
+        assert np.allclose(mine[0], theirs[0], rtol=0.0, atol=1e-12 * scale)
+        assert abs(mine[1] - theirs[1]) <= 1e-12
+        # a - b = h n, a on A's side, b on B's
+        nn, w, a, b = mine[0]
+        assert np.allclose(a - b, w, rtol=0.0, atol=1e-12 * scale)
+        assert abs(math.hypot(a[0], a[1]) - ra) <= 1e-12 * scale and abs(a[2]) <= ha / 2
+        bl = rot.T @ (b - t_ab)
+        assert abs(math.hypot(bl[0], bl[1]) - rb) <= 1e-12 * scale and abs(bl[2]) <= hb / 2
+    assert taken >= 60 and refused >= 60
+
+
 @pytest.mark.parametrize("other", ["cylinder", "convex", "segment"])
 def test_crossing_basin_is_proved(other):
     # Where a cylinder's side (A, along z) crosses B's segment (a cylinder's side, or a
@@ -1201,5 +1263,6 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
             fs[G._T3 + 16] = h * n
             fs[G._T3 + 17] = x
             fs[G._T3 + 18] = x - h * n
-            assert G._stored_certified(sb, sa, rot, t_ab, fs, tol) == expect
+            bound = G._pending_bound(sb, sa, rot, t_ab, fs, tol)
+            assert bound == (-np.inf if expect else float(n @ fs[G._T3 + 16]) - tol)
     assert inside >= 15 and outside >= 15

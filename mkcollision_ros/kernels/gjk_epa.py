@@ -115,7 +115,11 @@ Phases of ``gjk_epa``
      A minimum whose cap test fails stays a candidate and is tested again at every
      later step as the polytope grows (until then EPA went on to the next try, 100x
      closer, ~10 steps later): it is taken as soon as the test passes, or dropped when
-     EPA finds a direction deeper by more than the tolerance.
+     EPA finds a direction deeper by more than the tolerance.  Two cylinders have
+     one crossing face, normal to both axes, so EPA tests it once at its start, with
+     no support (_cylinders_crossing), not at every step from its best face (session
+     26; pure-Python count, 300 cases, seed 5: deep cylinder-cylinder pairs 19.5 ->
+     19.0 GJK + EPA steps, those whose minimum is on that face 8.0 -> 6.5 EPA steps).
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
@@ -1717,6 +1721,49 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, best, dx, dy, dz)
 
 
 @njit_inline
+def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
+    """_crossing_test for two cylinders, whatever EPA's best face: whether the
+    parallelogram face their sides make normal to both axes holds a minimum of h,
+    stored as _crossing_test stores it (ws t3 rows 15-18, the cap in row 3).
+
+    Why at once: it is the only crossing face two cylinders' difference has, so its
+    normal n (normal to both axes) needs no search: along +-n both supports are side
+    segments and h(+-n) = r_a + r_b -+ n . t (t: B's centre in A's frame), so the
+    lower of the two is the one with n . t >= 0, and the foot of the origin on either
+    face lies at the same segment parameters (the difference of the two faces is a
+    shift along n): where it falls outside the lower face, it falls outside the
+    other as well.  So one test, with no support, decides it before EPA's normal
+    comes near n: EPA holds the minimum from its first step (pure-Python count, 300
+    cases, seed 5: deep cylinder pairs whose minimum is there 8.0 -> 6.5 EPA steps),
+    and its per-step test, a call that mostly found d near no crossing, is gone for
+    this pair.  Axes parallel within 1e-6: no face."""
+    bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+    sn = math.sqrt(bx * bx + by * by)         # |a x b|, a = (0, 0, 1)
+    if not sn > 1e-6:
+        return False
+    nx, ny = -by / sn, bx / sn
+    nt = nx * t_ab[0] + ny * t_ab[1]
+    if nt < 0.0:
+        nx, ny, nt = -nx, -ny, -nt
+    ra, la, rb, lb = sa[1][0], sa[1][1], sb[1][0], sb[1][1]
+    h = ra + rb - nt
+    # s a - u b = g: the foot's parameters on A's and B's segments (their midpoints
+    # r_a n and t - r_b n)
+    gx, gy, gz = t_ab[0] - nt * nx, t_ab[1] - nt * ny, t_ab[2]
+    gb = gx * bx + gy * by + gz * bz
+    den = sn * sn
+    s = (gz - bz * gb) / den
+    u = (bz * gz - gb) / den
+    rin = sn * min(la - abs(s), lb - abs(u))
+    if not (h > 0.0 and rin >= 1e-7 * scale):
+        return False
+    _store_min(fs, nx, ny, 0.0, h * nx, h * ny, 0.0, ra * nx, ra * ny, s,
+               t_ab[0] - rb * nx + u * bx, t_ab[1] - rb * ny + u * by, t_ab[2] + u * bz)
+    fs[_T3 + 3, 0] = _face_basin(rin, h)
+    return True
+
+
+@njit_inline
 def _side_mid(side, sa, sb, r_ab, t_ab, nx, ny, nz):
     """The midpoint (A's frame) of the side segment of the cylinder on ``side`` that is
     its support along n (A's; -n for B's), n normal to its axis."""
@@ -1816,11 +1863,15 @@ def _ball_certified(sa, sb, r_ab, t_ab, hmin, ax, ay, az, bx, by, bz):
 
 
 @njit_inline
-def _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
-    """_ball_certified on the minimum a polish stored (ws t3 rows 15-18: n, w, a, b)."""
+def _pending_bound(sa, sb, r_ab, t_ab, fs, tol):
+    """The bound EPA holds a minimum a polish stored (ws t3 rows 15-18: n, w, a, b) to:
+    h(n) - tol, which no face of its polytope outside the basin cap may undercut
+    (_polish_is_global), or -inf when _ball_certified proves it the depth."""
     n, w, a, b = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
-    return _ball_certified(sa, sb, r_ab, t_ab, _dot(n, w) - tol, a[0], a[1], a[2], b[0],
-                           b[1], b[2])
+    hmin = _dot(n, w) - tol
+    if _ball_certified(sa, sb, r_ab, t_ab, hmin, a[0], a[1], a[2], b[0], b[1], b[2]):
+        return -np.inf
+    return hmin
 
 
 @njit_inline
@@ -2198,6 +2249,16 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     # and of a parallelogram face of A - B (_crossing_test): from the same gain, at most
     # EPA_FACE_EVALS tests
     cross_left = EPA_FACE_EVALS if _crossing_pair(sa[0], sb[0]) else 0
+    if sa[0] == CYLINDER and sb[0] == CYLINDER:
+        # two cylinders have one crossing face, normal to both axes, whatever EPA's
+        # best face: tested now, once, with no support (_cylinders_crossing), and not
+        # at every step
+        pend = _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs)
+        cross_left = 0
+        if pend:
+            p_planes = True
+            p_cap = fs[_T3 + 3, 0]
+            p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
     while True:
         # face closest to the origin
         best = -1
@@ -2250,10 +2311,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 pend = True
                 p_planes = True
                 p_cap = fs[_T3 + 3, 0]
-                p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
+                p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
                 p_fail = -1
-                if _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
-                    p_h = -np.inf       # the depth itself: no face can be deeper
         if pend:
             p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
                                        p_cap, p_fail)
@@ -2281,9 +2340,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                     pend = True
                     p_planes = kc >= 0 or creaseless
                     p_cap = _polish_cap(kc, capsule, box)
-                    p_h = _dot(fs[_T3 + 15], fs[_T3 + 16]) - tol
-                    if _stored_certified(sa, sb, r_ab, t_ab, fs, tol):
-                        p_h = -np.inf
+                    p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
                     p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h,
                                                p_planes, p_cap, -1)
                     if p_fail < 0:

@@ -1266,3 +1266,55 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
             bound = G._pending_bound(sb, sa, rot, t_ab, fs, tol)
             assert bound == (-np.inf if expect else float(n @ fs[G._T3 + 16]) - tol)
     assert inside >= 15 and outside >= 15
+
+
+def test_cylinder_pair_ball_certified_depth_is_global():
+    # Two cylinders whose cores overlap are first tried without GJK or EPA
+    # (kernels/cylcyl.py): a rim's point nearest the other's axis, or the lowest point
+    # under the other's cap, whose ball inside the other is as deep as h_{A-B} along
+    # the other's normal there, certifies that h as the depth (within EPA_REL_TOL *
+    # scale).  On random pairs: the pairs cylinders_depth certifies (called directly)
+    # get its depth from the batch kernel, that depth is h(normal) by the numpy
+    # oracle, the witnesses lie on the two surfaces, and it is never deeper than the
+    # slow oracle's minimum of h over directions (a wrong certificate, a ball that is
+    # not inside, would report a depth above the true one).  At least 10% of the
+    # penetrating pairs are certified (measured here 116 of 750, 15%: these overlaps
+    # are deep, up to the centres' coinciding; bench/deep_pairs.py's cases: 30%).
+    from mkcollision_ros.kernels.cylcyl import cylinders_depth
+    from mkcollision_ros.kernels.geometry import quat_to_matrix, relative_pose
+    from mkcollision_ros.shapes import build_table
+    rng = np.random.default_rng(31)
+    n = 800
+    sa, pa, qa, sb, pb, qb = O.random_pairs(rng, "cylinder", "cylinder", n, offset=(0.0, 0.8))
+    out, st = O.run_batch(sa, pa, qa, sb, pb, qb)
+    pen = np.flatnonzero(st == ST_PENETRATING)
+    certified, oracle_checked = 0, 0
+    for k in pen:
+        table = build_table([sa[k], sb[k]])
+        qa_k, qb_k = (q / np.linalg.norm(q) for q in (qa[k], qb[k]))
+        r_ab, t_ab = relative_pose(pa[k], quat_to_matrix(qa_k), pb[k], quat_to_matrix(qb_k))
+        shapes = [(table.codes[i], table.params[i], table.vrange[i, 0], table.vrange[i, 1])
+                  for i in range(2)]
+        res = np.zeros(10)
+        h_core = cylinders_depth(shapes[0], shapes[1], table.verts, r_ab, t_ab,
+                                 table.params[0, 7] + table.params[1, 7], res)
+        if not h_core > 0.0:
+            continue
+        certified += 1
+        scale = O.bounding_radius(sa[k]) + O.bounding_radius(sb[k])
+        margins = sa[k].get("margin", 0.0) + sb[k].get("margin", 0.0)
+        depth = -out[k, OUT_DIST]
+        assert abs(depth - (h_core + margins)) <= 1e-12 * scale
+        a, pose_a, b, pose_b = sa[k], (pa[k], qa_k), sb[k], (pb[k], qb_k)
+        nrm = out[k, OUT_NORMAL:OUT_NORMAL + 3]
+        h = O.cso_support(a, pose_a, b, pose_b, nrm[None])[0]
+        assert abs(h - depth) <= 1e-12 * scale
+        assert abs(O.surface_gap(a, pose_a, out[k, OUT_PA:OUT_PA + 3], nrm)) <= 1e-9 * scale
+        assert abs(O.surface_gap(b, pose_b, out[k, OUT_PB:OUT_PB + 3], -nrm)) <= 1e-9 * scale
+        if oracle_checked < 60:
+            oracle_checked += 1
+            sd, _ = O.signed_distance_oracle(a, pose_a, b, pose_b, n_start=2000, n_keep=6,
+                                             n_iter=200)
+            assert depth <= -sd + 1e-8 * scale
+    assert len(pen) >= 250
+    assert certified >= 0.1 * len(pen)

@@ -190,6 +190,7 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
+from .cylcyl import cylinders_depth
 from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -2608,6 +2609,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # a box and a cylinder whose cores overlap: the exact depth in closed form,
         # certified, without GJK or EPA (boxcyl); else (apart, touching, or not
         # certified) GJK and EPA as for any pair
+        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+    if sa[0] == CYLINDER and sb[0] == CYLINDER \
+            and cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res) > 0.0:
+        # two cylinders whose cores overlap, a point of one as deep inside the other as
+        # h along that other's normal there: the depth certified by a ball (cylcyl),
+        # without GJK or EPA; else GJK and EPA
         return _core_out(out, res, ra, rb, pa, pb, 1, scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,

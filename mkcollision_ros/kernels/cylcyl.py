@@ -117,13 +117,13 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     B); 0 (res untouched) when no candidate is certified.  sa, sb: shape tuples of two
     cylinders.
 
-    The caps' candidates first (no support of A - B, and their balls bound each rim's
-    from above nowhere, so all four are tried); then the rims, in the order of an upper
-    bound on their balls (R - |q_xy| + rho and H - |q_z| + rho sin(angle of the axes),
-    q the rim's centre), each solved only while its bound exceeds the deepest ball
-    found: only the deepest rim point can be certified (every ball is at most the
-    depth, and a certified one is within tol of it), and one support of A - B along
-    its normal decides."""
+    The caps' four candidates first (none needs a support of A - B, and a certified
+    one ends the search: it is the depth within tol); then the rims, in the order of
+    an upper bound on their balls (R - |q_xy| + rho and H - |q_z| + rho sin(angle of
+    the axes), q the rim's centre), each solved only while its bound exceeds the
+    deepest ball found: only the deepest rim point can be certified (every ball is at
+    most the depth, and a certified one is within tol of it), and one support of A - B
+    along its normal decides."""
     tol = EPA_REL_TOL * scale
     best_h = math.inf
     cap_side = -1

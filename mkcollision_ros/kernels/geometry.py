@@ -97,6 +97,14 @@ def relative_pose(pos_a_w, r_a_w, pos_b_w, r_b_w):
 
 
 @njit_inline
+def cylinder_inradius(r, h, x, y, z):
+    """The radius of the largest ball about the point (x, y, z) inside the cylinder of
+    radius r and half-height h about the z axis: the point's gap to the side or to the
+    nearer cap, the smaller; negative where the point lies outside."""
+    return min(r - math.sqrt(x * x + y * y), h - abs(z))
+
+
+@njit_inline
 def inflation(code, prm):
     """Radius (m) by which the core of the shape is grown: its margin, plus the radius
     for spheres and capsules and the rolling radius for ellipsoids."""

@@ -190,8 +190,9 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
-from .cylcyl import cylinders_depth
-from .geometry import borrow_args, inflation, meet, minkowski_support_xyz, shape_scale
+from .cylcyl import cylinders_depth, ellipsoid_cylinder_depth, segment_cylinder_depth
+from .geometry import (borrow_args, cylinder_inradius, inflation, meet, minkowski_support_xyz,
+                       shape_scale)
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -1831,7 +1832,7 @@ def _core_inradius(side, sa, sb, r_ab, t_ab, x, y, z):
         return -np.inf
     px, py, pz = _in_side_frame(side, r_ab, t_ab, x, y, z)
     if code == CYLINDER:
-        r = min(prm[0] - math.sqrt(px * px + py * py), prm[1] - abs(pz))
+        r = cylinder_inradius(prm[0], prm[1], px, py, pz)
     else:
         r = min(prm[0] - abs(px), min(prm[1] - abs(py), prm[2] - abs(pz)))
     return r if r >= 0.0 else -np.inf
@@ -2615,6 +2616,15 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # two cylinders whose cores overlap, a point of one as deep inside the other as
         # h along that other's normal there: the depth certified by a ball (cylcyl),
         # without GJK or EPA; else GJK and EPA
+        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+    if ((sa[0] == CAPSULE and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == CAPSULE)) \
+            and segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res) > 0.0:
+        # a capsule's segment in a cylinder, pressed into its side or a cap (cylcyl):
+        # the depth certified by a ball, without GJK or EPA; else GJK and EPA
+        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+    if ((sa[0] == ELLIPSOID and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == ELLIPSOID)) \
+            and ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res) > 0.0:
+        # an ellipsoid's core pressed into a cylinder's side or a cap (cylcyl): likewise
         return _core_out(out, res, ra, rb, pa, pb, 1, scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,

@@ -327,9 +327,10 @@ def ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     each step's g at or past R proves the cores apart: on the cases below, 469 of the
     1,442 pairs the caps leave get past the bounds and Newton's first step (all 160
     side certificates among them).
-    Measured on bench/deep_pairs.py's 2,000 ellipsoid-cylinder cases (a numpy rehearsal
-    against GJK + EPA at bbd9fa6): 190 of the 601 pairs whose cores overlap by more than
-    1e-3 * scale certified (159 by the side, 31 by a cap), depths within 2.5e-13 *
+    Measured on bench/deep_pairs.py's 2,000 ellipsoid-cylinder cases (this function run
+    with NUMBA_DISABLE_JIT, against GJK + EPA at bbd9fa6): 190 of the 601 pairs whose
+    cores overlap by more than 1e-3 * scale certified (159 by the side, 31 by a cap; and
+    one pair that overlaps less), depths within 2.5e-13 *
     scale of EPA's, normals within 1e-6 rad, and 527 of the 2,000 proved apart by a
     cap; every pair the reference has penetrating less deeply, or apart, is left to
     GJK."""

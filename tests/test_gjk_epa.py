@@ -31,9 +31,9 @@ import pytest
 
 import oracles as O
 from mkcollision_ros import collide
-from mkcollision_ros.kernels.constants import (OUT_DIST, OUT_NORMAL, OUT_PA, OUT_PB,
-                                               ST_FAILED, ST_PENETRATING, ST_SEPARATED,
-                                               ST_TOUCHING)
+from mkcollision_ros.kernels.constants import (OUT_DIST, OUT_ITERS, OUT_NORMAL, OUT_PA,
+                                               OUT_PB, ST_FAILED, ST_PENETRATING,
+                                               ST_SEPARATED, ST_TOUCHING)
 
 N_PAIRS = int(os.environ.get("MKC_N", 10000))
 ID = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
@@ -1268,22 +1268,38 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
     assert inside >= 15 and outside >= 15
 
 
-def _check_certified_shortcut(seed, kinds, shortcut, n_oracle, h_slack):
+def _cylinder_shortcut(kinds):
+    """cylcyl's shortcut for a cylinder and the other kind of ``kinds``, as
+    f(shape_a, shape_b, verts, r_ab, t_ab, scale, res)."""
+    from mkcollision_ros.kernels import cylcyl as C
+    other = kinds[0] if kinds[1] == "cylinder" else kinds[1]
+    if other == "cylinder":
+        return C.cylinders_depth
+    if other == "convex":
+        return C.hull_cylinder_depth
+    f = C.segment_cylinder_depth if other == "capsule" else C.ellipsoid_cylinder_depth
+    return lambda sa, sb, verts, r_ab, t_ab, scale, res: f(sa, sb, r_ab, t_ab, scale, res)
+
+
+def _check_certified_shortcut(seed, kinds, n_oracle, h_slack):
     """800 random pairs of the two kinds through the batch kernel; on each penetrating
-    pair that ``shortcut(shape_a, shape_b, r_ab, t_ab, scale, res)`` (called directly)
+    pair that _cylinder_shortcut(kinds) (called directly)
     certifies: the batch kernel reports its core depth grown by the inflation radii,
     h_{A-B}(normal) by the numpy oracle is that depth to within h_slack * scale and
     never below it, the witnesses lie on the two surfaces, and (on the first n_oracle)
     the depth is never deeper than the slow oracle's minimum of h over directions (a
     wrong certificate, a ball that is not inside, would report a depth above the true
-    one).  Returns (pairs certified, pairs penetrating)."""
+    one).  Returns (pairs certified, pairs penetrating, the certified pairs' (core
+    normal in A's frame, r_ab))."""
     from mkcollision_ros.kernels.geometry import inflation, quat_to_matrix, relative_pose
     from mkcollision_ros.shapes import build_table
+    shortcut = _cylinder_shortcut(kinds)
     rng = np.random.default_rng(seed)
     sa, pa, qa, sb, pb, qb = O.random_pairs(rng, *kinds, 800, offset=(0.0, 0.8))
     out, st = O.run_batch(sa, pa, qa, sb, pb, qb)
     pen = np.flatnonzero(st == ST_PENETRATING)
     certified = 0
+    found = []
     for k in pen:
         table = build_table([sa[k], sb[k]])
         qa_k, qb_k = (q / np.linalg.norm(q) for q in (qa[k], qb[k]))
@@ -1292,10 +1308,11 @@ def _check_certified_shortcut(seed, kinds, shortcut, n_oracle, h_slack):
                   for i in range(2)]
         scale = table.params[0, 7] + table.params[1, 7]
         res = np.zeros(10)
-        h_core = shortcut(shapes[0], shapes[1], r_ab, t_ab, scale, res)
+        h_core = shortcut(shapes[0], shapes[1], table.verts, r_ab, t_ab, scale, res)
         if not h_core > 0.0:
             continue
         certified += 1
+        found.append((res[1:4].copy(), r_ab))
         grown = sum(inflation(table.codes[i], table.params[i]) for i in range(2))
         depth = -out[k, OUT_DIST]
         assert abs(depth - (h_core + grown)) <= 1e-12 * scale
@@ -1309,7 +1326,7 @@ def _check_certified_shortcut(seed, kinds, shortcut, n_oracle, h_slack):
             sd, _ = O.signed_distance_oracle(a, pose_a, b, pose_b, n_start=2000, n_keep=6,
                                              n_iter=200)
             assert depth <= -sd + 1e-8 * scale
-    return certified, len(pen)
+    return certified, len(pen), found
 
 
 def test_cylinder_pair_ball_certified_depth_is_global():
@@ -1317,46 +1334,110 @@ def test_cylinder_pair_ball_certified_depth_is_global():
     # (kernels/cylcyl.py): a rim's point nearest the other's axis, or the lowest point
     # under the other's cap, whose ball inside the other is as deep as h_{A-B} along
     # the other's normal there, certifies that h as the depth (within EPA_REL_TOL *
-    # scale; it reports that h itself).  Checked on random pairs as
+    # scale; it reports that h itself); so does the crossing of the two sides, h along
+    # the normal to both axes against a witness's ball.  Checked on random pairs as
     # _check_certified_shortcut says.  At least 10% of the penetrating pairs are
-    # certified (measured here 116 of 750, 15%: these overlaps are deep, up to the
-    # centres' coinciding; bench/deep_pairs.py's cases: 30%).
-    from mkcollision_ros.kernels.cylcyl import cylinders_depth
-    certified, pen = _check_certified_shortcut(
-        31, ("cylinder", "cylinder"),
-        lambda sa, sb, r_ab, t_ab, scale, res: cylinders_depth(sa, sb, np.zeros((0, 3)),
-                                                               r_ab, t_ab, scale, res),
-        60, 0.0)
+    # certified (measured here 160 of 750, 21%: these overlaps are deep, up to the
+    # centres' coinciding; bench/deep_pairs.py's cases: 41%), at least 20 of them by the
+    # crossing (measured here: 44), whose normal is square to both axes.
+    certified, pen, found = _check_certified_shortcut(31, ("cylinder", "cylinder"), 60,
+                                                      0.0)
     assert pen >= 250
     assert certified >= 0.1 * pen
+    crossing = sum(abs(n[2]) < 1e-12 and abs(n @ r_ab[:, 2]) < 1e-12 for n, r_ab in found)
+    assert crossing >= 20
 
 
 @pytest.mark.parametrize("order", ["capsule-cylinder", "cylinder-capsule",
-                                   "ellipsoid-cylinder", "cylinder-ellipsoid"])
+                                   "ellipsoid-cylinder", "cylinder-ellipsoid",
+                                   "convex-cylinder", "cylinder-convex"])
 def test_cylinder_shortcut_certified_depth_is_global(order):
-    # A capsule or an ellipsoid whose core overlaps a cylinder is first tried without
-    # GJK or EPA (cylcyl.segment_cylinder_depth, ellipsoid_cylinder_depth): the core's
-    # point nearest the cylinder's axis against the side, or its lowest point under a
-    # cap against that cap, whose ball inside the cylinder is as deep as h_{A-B} along
-    # the normal there.  Checked on random pairs in both orders as
-    # _check_certified_shortcut says; the depth reported is the witness's gap to the
-    # cylinder's side or cap, within EPA_REL_TOL * scale of h.  At least a fifth of the
-    # penetrating pairs are certified (measured here, in the orders listed: 210 of 723,
-    # 204 of 715, 188 of 734, 179 of 738).
+    # A capsule, an ellipsoid or a convex hull whose core overlaps a cylinder is first
+    # tried without GJK or EPA (cylcyl.segment_cylinder_depth, ellipsoid_cylinder_depth,
+    # hull_cylinder_depth): the core's point nearest the cylinder's axis against the
+    # side, or its lowest point under a cap against that cap, whose ball inside the
+    # cylinder is as deep as h_{A-B} along the normal there.  Checked on random pairs in
+    # both orders as _check_certified_shortcut says; the depth reported is the
+    # witness's gap to the cylinder's side or cap, within EPA_REL_TOL * scale of h.  At
+    # least a fifth of the penetrating pairs are certified, a tenth for hulls (measured
+    # here, in the orders listed: 210 of 723, 204 of 715, 188 of 734, 179 of 738, 157
+    # of 699, 157 of 703).
     from mkcollision_ros.kernels.constants import EPA_REL_TOL
-    from mkcollision_ros.kernels.cylcyl import (ellipsoid_cylinder_depth,
-                                                segment_cylinder_depth)
     seed = {"capsule-cylinder": 37, "cylinder-capsule": 41, "ellipsoid-cylinder": 43,
-            "cylinder-ellipsoid": 47}[order]
-    shortcut = segment_cylinder_depth if "capsule" in order else ellipsoid_cylinder_depth
-    certified, pen = _check_certified_shortcut(seed, order.split("-"), shortcut, 40,
-                                               EPA_REL_TOL)
+            "cylinder-ellipsoid": 47, "convex-cylinder": 59, "cylinder-convex": 61}[order]
+    certified, pen, _ = _check_certified_shortcut(seed, order.split("-"), 40, EPA_REL_TOL)
     assert pen >= 250
-    assert certified >= 0.2 * pen
+    assert certified >= (0.1 if "convex" in order else 0.2) * pen
+
+
+@pytest.mark.parametrize("order", ["cylinder-cylinder", "capsule-cylinder",
+                                   "cylinder-capsule", "ellipsoid-cylinder",
+                                   "cylinder-ellipsoid", "convex-cylinder",
+                                   "cylinder-convex"])
+def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
+    # Where cylcyl's shortcuts find the cores apart (one past a cap's plane, beyond the
+    # side's tangent plane, or, for two cylinders, across the plane of their sides'
+    # crossing, or a hull's shadow missing the side's disc) they return minus that
+    # plane's gap, with its normal and a point of each
+    # core; in contacts mode (cutoff 0) gjk_epa_ws then ends the pair with that bound,
+    # without GJK, when it clears the touching band.  On random pairs, each pair the
+    # shortcut so decides: the contacts-mode row is SEPARATED as the exact one (cutoff
+    # inf), in one iteration, at the plane's gap less the radii, which is positive and
+    # at most the exact distance; the plane normal to its normal separates the shapes
+    # by that much (h_{A-B}(n) by the numpy oracle); and both witnesses lie in their
+    # shapes (the slow oracle's inside test).  At least 5% of the pairs are so decided
+    # (measured here, in the orders listed: 84, 124, 116, 109, 87, 168 and 155 of 600).
+    from mkcollision_ros.kernels.constants import METHOD_NAMES, TOUCH_TOL
+    from mkcollision_ros.kernels.geometry import inflation, quat_to_matrix, relative_pose
+    from mkcollision_ros.kernels.narrowphase import collide_batch
+    from mkcollision_ros.shapes import build_table
+    kinds = order.split("-")
+    shortcut = _cylinder_shortcut(kinds)
+    rng = np.random.default_rng(["cylinder-cylinder", "capsule-cylinder", "cylinder-capsule",
+                                 "ellipsoid-cylinder", "cylinder-ellipsoid", "convex-cylinder",
+                                 "cylinder-convex"].index(order) + 53)
+    sa, pa, qa, sb, pb, qb = O.random_pairs(rng, *kinds, 600, offset=(0.0, 1.0))
+    exact, st = O.run_batch(sa, pa, qa, sb, pb, qb)
+    n = len(sa)
+    table = build_table(list(sa) + list(sb))
+    pairs = np.stack([np.arange(n), np.arange(n) + n], axis=1).astype(np.int64)
+    quat = np.concatenate([qa, qb])
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    pos = np.ascontiguousarray(np.concatenate([pa, pb]))
+    cut = np.zeros_like(exact)
+    st_cut = np.zeros_like(st)
+    collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, quat,
+                  np.int64(METHOD_NAMES.index("gjk_epa")), 0.0, cut, st_cut)
+    decided = 0
+    for k in range(n):
+        shapes = [(table.codes[i], table.params[i], table.vrange[i, 0], table.vrange[i, 1])
+                  for i in (k, k + n)]
+        scale = table.params[k, 7] + table.params[k + n, 7]
+        r_ab, t_ab = relative_pose(pos[k], quat_to_matrix(quat[k]), pos[k + n],
+                                   quat_to_matrix(quat[k + n]))
+        res = np.zeros(10)
+        h_core = shortcut(shapes[0], shapes[1], table.verts, r_ab, t_ab, scale, res)
+        grown = sum(inflation(table.codes[i], table.params[i]) for i in (k, k + n))
+        if not (h_core < 0.0 and -h_core - grown > TOUCH_TOL * scale):
+            continue
+        decided += 1
+        d, nrm = cut[k, OUT_DIST], cut[k, OUT_NORMAL:OUT_NORMAL + 3]
+        assert st[k] == st_cut[k] == ST_SEPARATED
+        assert cut[k, OUT_ITERS] == 1
+        assert abs(d - (-h_core - grown)) <= 1e-12 * scale
+        assert 0.0 < d <= exact[k, OUT_DIST] + 1e-12 * scale
+        pose_a, pose_b = (pos[k], quat[k]), (pos[k + n], quat[k + n])
+        h = O.cso_support(sa[k], pose_a, sb[k], pose_b, nrm[None])[0]
+        assert h <= -d + 1e-9 * scale
+        assert O.inside_value(sa[k], pose_a, cut[k, OUT_PA:OUT_PA + 3]) <= 1e-9 * scale
+        assert O.inside_value(sb[k], pose_b, cut[k, OUT_PB:OUT_PB + 3]) <= 1e-9 * scale
+    assert decided >= 0.05 * n
 
 
 CYL = {"type": "cylinder", "radius": 0.5, "height": 0.6}
-ACROSS_X = [0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)]   # the capsule's axis along x
+ACROSS_X = [0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)]   # a body's axis along x
+OCTAHEDRON = {"type": "convex", "points": [[0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], [0.0, 0.1, 0.0],
+                                           [0.0, -0.1, 0.0], [0.0, 0.0, 0.1], [0.0, 0.0, -0.1]]}
 
 
 @pytest.mark.parametrize("method", ["gjk_epa", "auto"])
@@ -1389,14 +1470,29 @@ ACROSS_X = [0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)]   # the capsule's axis alo
      {"type": "ellipsoid", "radii": [0.2, 0.1, 0.15], "margin": 0.01},
      ([0.1, 0.1, 0.38], [0.0, 0.0, 0.0, 1.0]), True, 0.08, [0.0, 0.0, -1.0],
      [0.1, 0.1, 0.22]),
+    # a thin cylinder along x crossing the side, 0.1 deep: the crossing of the sides
+    # (no cap or rim is certified here; GJK and EPA would take three steps)
+    ("cylinder crossing the side", {"type": "cylinder", "radius": 0.2, "height": 2.0},
+     ([0.0, 0.6, 0.0], ACROSS_X), False, 0.1, [0.0, 1.0, 0.0], [0.0, 0.5, 0.0]),
+    # the same, its axis tilted 30 degrees up, off the centre, with a margin
+    ("tilted cylinder crossing the side",
+     {"type": "cylinder", "radius": 0.15, "height": 2.0, "margin": 0.05},
+     ([0.1, 0.6, 0.05], [0.0, 0.5, 0.0, math.sqrt(0.75)]), False, None, None, None),
+    # an octahedron's vertex pressed 0.05 into the side (the hull's point nearest the
+    # axis: GJK on its shadow), and one 0.02 into the top, the hull as A
+    ("hull's vertex against the side", OCTAHEDRON, ([0.55, 0.0, 0.05], [0.0, 0.0, 0.0, 1.0]),
+     False, 0.05, [1.0, 0.0, 0.0], [0.5, 0.0, 0.05]),
+    ("hull's vertex into the top", OCTAHEDRON, ([0.1, 0.1, 0.38], [0.0, 0.0, 0.0, 1.0]),
+     True, 0.02, [0.0, 0.0, -1.0], [0.1, 0.1, 0.28]),
 ])
 def test_cylinder_shortcut_closed_form_scenes(scene, other, pose_other, swap, depth, normal,
                                               point_a, method):
-    # Closed-form depths of a capsule or an ellipsoid pressed into a cylinder's side or
-    # cap, taken by cylcyl's shortcuts (one iteration: no GJK or EPA step), with the
-    # exact normal and witnesses; the same with A and B swapped (normal flipped).  The
-    # tilted ellipsoid has no simple closed form: there the shortcut's depth is h(n) by
-    # the numpy oracle and no deeper than the slow oracle's.
+    # Closed-form depths of a capsule, an ellipsoid or a hull pressed into a cylinder's
+    # side or cap, or a cylinder crossing its side, taken by cylcyl's shortcuts (one iteration:
+    # no GJK or EPA step), with the exact normal and witnesses; the same with A and B
+    # swapped (normal flipped).  The tilted ellipsoid and cylinder are checked without
+    # a closed form: there the shortcut's depth is h(n) by the numpy oracle and no
+    # deeper than the slow oracle's.
     a, pose_a, b, pose_b = CYL, ID, other, pose_other
     if swap:
         a, pose_a, b, pose_b = b, pose_b, a, pose_a

@@ -190,7 +190,8 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
-from .cylcyl import cylinders_depth, ellipsoid_cylinder_depth, segment_cylinder_depth
+from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
+                     segment_cylinder_depth, sides_crossing)
 from .geometry import (borrow_args, cylinder_inradius, inflation, meet, minkowski_support_xyz,
                        shape_scale)
 from .jit import borrow, njit_inline, njit_kernel
@@ -1725,8 +1726,10 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, best, dx, dy, dz)
 @njit_inline
 def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
     """_crossing_test for two cylinders, whatever EPA's best face: whether the
-    parallelogram face their sides make normal to both axes holds a minimum of h,
-    stored as _crossing_test stores it (ws t3 rows 15-18, the cap in row 3).
+    parallelogram face their sides make normal to both axes (cylcyl.sides_crossing)
+    holds a minimum of h, stored as _crossing_test stores it (ws t3 rows 15-18, the cap
+    in row 3).  (cylcyl.cylinders_depth has certified the pairs where a witness's ball
+    reaches h before GJK; here the others, whose balls a cap cuts short.)
 
     Why at once: it is the only crossing face two cylinders' difference has, so its
     normal n (normal to both axes) needs no search: along +-n both supports are side
@@ -1739,23 +1742,11 @@ def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
     cases, seed 5: deep cylinder pairs whose minimum is there 8.0 -> 6.5 EPA steps),
     and its per-step test, a call that mostly found d near no crossing, is gone for
     this pair.  Axes parallel within 1e-6: no face."""
-    bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
-    sn = math.sqrt(bx * bx + by * by)         # |a x b|, a = (0, 0, 1)
-    if not sn > 1e-6:
+    nx, ny, h, s, u, sn = sides_crossing(sa, sb, r_ab, t_ab)
+    if not sn > 0.0:
         return False
-    nx, ny = -by / sn, bx / sn
-    nt = nx * t_ab[0] + ny * t_ab[1]
-    if nt < 0.0:
-        nx, ny, nt = -nx, -ny, -nt
     ra, la, rb, lb = sa[1][0], sa[1][1], sb[1][0], sb[1][1]
-    h = ra + rb - nt
-    # s a - u b = g: the foot's parameters on A's and B's segments (their midpoints
-    # r_a n and t - r_b n)
-    gx, gy, gz = t_ab[0] - nt * nx, t_ab[1] - nt * ny, t_ab[2]
-    gb = gx * bx + gy * by + gz * bz
-    den = sn * sn
-    s = (gz - bz * gb) / den
-    u = (bz * gz - gb) / den
+    bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
     rin = sn * min(la - abs(s), lb - abs(u))
     if not (h > 0.0 and rin >= 1e-7 * scale):
         return False
@@ -2580,9 +2571,11 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     are exact; a pair GJK proves farther apart than that is returned at once as
     ST_SEPARATED with ``distance`` a certified lower bound (> cutoff), the separating
     direction as normal and the current simplex points (moved out by the radii) as
-    witness points, which then are not the closest points.  A pipeline that wants
-    contacts only passes 0 and saves the GJK steps that would refine a distance it
-    throws away (as MuJoCo's collision pass, which reports no distances, does)."""
+    witness points, which then are not the closest points (a cylinder with a cylinder,
+    a capsule, an ellipsoid or a hull: cylcyl's separating planes likewise, before GJK).  A
+    pipeline that wants contacts only passes 0 and saves the GJK steps that would
+    refine a distance it throws away (as MuJoCo's collision pass, which reports no
+    distances, does)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     out = borrow(out)
@@ -2611,21 +2604,25 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # certified, without GJK or EPA (boxcyl); else (apart, touching, or not
         # certified) GJK and EPA as for any pair
         return _core_out(out, res, ra, rb, pa, pb, 1, scale)
-    if sa[0] == CYLINDER and sb[0] == CYLINDER \
-            and cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res) > 0.0:
-        # two cylinders whose cores overlap, a point of one as deep inside the other as
-        # h along that other's normal there: the depth certified by a ball (cylcyl),
-        # without GJK or EPA; else GJK and EPA
-        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
-    if ((sa[0] == CAPSULE and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == CAPSULE)) \
-            and segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res) > 0.0:
-        # a capsule's segment in a cylinder, pressed into its side or a cap (cylcyl):
-        # the depth certified by a ball, without GJK or EPA; else GJK and EPA
-        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
-    if ((sa[0] == ELLIPSOID and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == ELLIPSOID)) \
-            and ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res) > 0.0:
-        # an ellipsoid's core pressed into a cylinder's side or a cap (cylcyl): likewise
-        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+    if sa[0] == CYLINDER or sb[0] == CYLINDER:
+        # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl): cores
+        # that overlap, one core's point as deep inside the cylinder as h along the
+        # normal there, get that depth certified by a ball; cores that a plane (a cap's,
+        # the side's tangent plane, the sides' crossing) proves apart by more than the
+        # cutoff and the touching band end with that gap as the distance bound, as GJK
+        # would stop there too.  Either without GJK or EPA; else GJK and EPA
+        other = sb[0] if sa[0] == CYLINDER else sa[0]
+        d = 0.0
+        if other == CYLINDER:
+            d = cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res)
+        elif other == CAPSULE:
+            d = segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res)
+        elif other == ELLIPSOID:
+            d = ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res)
+        elif other == CONVEX:
+            d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
+        if d > 0.0 or (d < 0.0 and -d - ra - rb > max(cutoff, TOUCH_TOL * scale)):
+            return _core_out(out, res, ra, rb, pa, pb, 1, scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
                               ra + rb + max(cutoff, TOUCH_TOL * scale),

@@ -155,7 +155,8 @@ def _crossing_depth(sa, sb, r_ab, t_ab, tol, res):
     B's axis) at B's axial coordinate u, so its ball in B has the radius min(r_b - |r_b
     - h|, l_b - |u|), and it is a point of A when |s| <= l_a; pb's in A likewise.
     Either ball >= h - tol certifies h; they fall short where a cap cuts them (the
-    crossing near a cylinder's end).  Returns h (res written) or 0."""
+    crossing near a cylinder's end).  Returns h (certified, res written), or minus the
+    gap -h when h <= 0 (the face's plane separates the cores; _apart_out), or 0."""
     nx, ny, h, s, u, sn = sides_crossing(sa, sb, r_ab, t_ab)
     if not sn > 0.0:
         return 0.0
@@ -576,8 +577,8 @@ def _apart_out(res, gap, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy, qz):
 
 @njit_inline
 def _past_cap(res, h, side, r_ab, t_ab, s, big_r, big_h, px, py, pz):
-    """A core past the cylinder's cap plane z = s H, its lowest point under it p (the
-    cylinder's frame) h = H - s p_z <= 0 under it: _apart_out with gap -h along the
+    """A core wholly past the cylinder's cap plane z = s H (the cylinder's frame), p its
+    point nearest that plane, h = H - s p_z <= 0: _apart_out with the gap -h along the
     cap's normal, q the cap's point nearest p."""
     f = 1.0
     rr = px * px + py * py

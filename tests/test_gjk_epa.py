@@ -1378,9 +1378,9 @@ def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
     # Where cylcyl's shortcuts find the cores apart (one past a cap's plane, beyond the
     # side's tangent plane, or, for two cylinders, across the plane of their sides'
     # crossing, or a hull's shadow missing the side's disc) they return minus that
-    # plane's gap, with its normal and a point of each
-    # core; in contacts mode (cutoff 0) gjk_epa_ws then ends the pair with that bound,
-    # without GJK, when it clears the touching band.  On random pairs, each pair the
+    # plane's gap, with its normal and a point of each core; in contacts mode (cutoff
+    # 0) gjk_epa_ws then ends the pair with that bound, without GJK, when it clears the
+    # touching band.  On random pairs, each pair the
     # shortcut so decides: the contacts-mode row is SEPARATED as the exact one (cutoff
     # inf), in one iteration, at the plane's gap less the radii, which is positive and
     # at most the exact distance; the plane normal to its normal separates the shapes

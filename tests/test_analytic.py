@@ -573,6 +573,17 @@ def _world_against_body_frame(shapes, pos, quat, normal_atol, point_tol):
     return st
 
 
+def _paired_poses(rng, n, spread):
+    """World poses of n pairs (2k, 2k + 1): random orientations, the first body near the
+    origin or 1e3 m from it, the second ``spread`` * a normal draw away from it."""
+    import oracles as O
+    quat = O.random_quats(rng, 2 * n)
+    pos = np.zeros((2 * n, 3))
+    pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
+    pos[1::2] = pos[0::2] + spread * rng.normal(size=(n, 3))
+    return quat, pos
+
+
 SPHERE_WORLD = ["sphere", "box", "capsule", "cylinder", "cone", "ellipsoid"]
 
 
@@ -584,7 +595,6 @@ def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_form
     collide_analytic, fed the relative pose, are the reference: the same status, the
     distance, normal and world witness points to round-off, the pair placed near the
     origin or 1e3 m from it."""
-    import oracles as O
     rng = np.random.default_rng(SPHERE_WORLD.index(kind) + 41)
     n = 400
     shapes = []
@@ -592,10 +602,7 @@ def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_form
         sphere = rand_shape(rng, "sphere")
         other = rand_shape(rng, kind, 0.0 if kind == "ellipsoid" else 0.3)
         shapes += [sphere, other] if k % 2 == 0 else [other, sphere]
-    quat = O.random_quats(rng, 2 * n)
-    pos = np.zeros((2 * n, 3))
-    pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
-    pos[1::2] = pos[0::2] + 0.9 * rng.normal(size=(n, 3))
+    quat, pos = _paired_poses(rng, n, 0.9)
     st = _world_against_body_frame(shapes, pos, quat, 1e-12, 1e-12)
     hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
     assert 0.2 < hits < 0.9
@@ -624,20 +631,40 @@ def test_sphere_centred_on_a_capsule_axis_pushes_across_the_axis():
                                atol=1e-12)
 
 
+HALF_SPACE_WORLD = ["sphere", "ellipsoid", "box", "capsule", "cylinder", "cone"]
+
+
+@pytest.mark.parametrize("kind", HALF_SPACE_WORLD)
+def test_batch_half_space_pairs_solved_in_the_world_match_the_body_frame_closed_form(kind):
+    """A shape against a half-space is solved straight from the world poses
+    (narrowphase._half_space_world, one call site for both orders); collide_analytic on
+    the relative pose is the reference, to round-off, with the plane as A and as B, near
+    the origin and 1e3 m from it."""
+    rng = np.random.default_rng(HALF_SPACE_WORLD.index(kind) + 61)
+    n = 200
+    shapes = []
+    for k in range(n):
+        nrm = rng.normal(size=3)
+        plane = {"type": "plane", "normal": list(nrm / np.linalg.norm(nrm)),
+                 "offset": float(rng.uniform(-0.5, 0.5)), "margin": float(rng.uniform(0, 0.1))}
+        other = rand_shape(rng, kind, 0.3)
+        shapes += [plane, other] if k % 2 == 0 else [other, plane]
+    quat, pos = _paired_poses(rng, n, 0.9)
+    st = _world_against_body_frame(shapes, pos, quat, 1e-12, 1e-9)
+    hits = np.isin(st, (C.ST_TOUCHING, C.ST_PENETRATING)).mean()
+    assert 0.2 < hits < 0.9
+
+
 def test_batch_capsule_pairs_solved_in_the_world_match_the_body_frame_closed_form():
     """Two capsules are solved straight from their world poses
     (analytic.capsule_capsule_world, the same segment kernel as the body-frame path);
     collide_analytic on the relative pose is the reference, to round-off, on random
     pairs, parallel axes (the overlap's middle) and axes crossing at the centres (the
     common perpendicular)."""
-    import oracles as O
     rng = np.random.default_rng(53)
     n = 600
     shapes = [rand_shape(rng, "capsule") for _ in range(2 * n)]
-    quat = O.random_quats(rng, 2 * n)
-    pos = np.zeros((2 * n, 3))
-    pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
-    pos[1::2] = pos[0::2] + 1.2 * rng.normal(size=(n, 3))
+    quat, pos = _paired_poses(rng, n, 1.2)
     quat[3:200:4] = quat[2:200:4]                                   # parallel axes
     pos[201:400:4] = pos[200:400:4]                                 # coincident centres
     st = _world_against_body_frame(shapes, pos, quat, 1e-9, 1e-9)

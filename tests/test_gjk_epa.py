@@ -1021,7 +1021,7 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
         sa = (table.codes[0], table.params[0], table.vrange[0, 0], table.vrange[0, 1])
         sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
         scale = float(table.params[0, 7] + table.params[1, 7])
-        args = (sa, sb, table.verts, np.ascontiguousarray(rb), pos_b, True, scale, ws)
+        args = (sa, sb, table.verts, np.ascontiguousarray(rb), pos_b, scale, ws)
         if G._face_test(*args, 0, 2, 1.0) <= 0:
             continue
         fs = ws[0]
@@ -1084,7 +1084,7 @@ def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
         ks, hs = [], []
         for sgn in (1.0, -1.0):
             d = sgn * n
-            k = G._crossing_test(sa, sb, table.verts, rot, t_ab, True, scale, ws, 0,
+            k = G._crossing_test(sa, sb, table.verts, rot, t_ab, scale, ws, 0,
                                  d[0], d[1], d[2])
             ks.append(k)
             hs.append(float(fs[G._T3 + 15] @ fs[G._T3 + 16]) if k == 1 else np.inf)
@@ -1177,7 +1177,7 @@ def test_crossing_basin_is_proved(other):
             ws[0][G._VB:G._VB + 3] = pts[[1, 4, 0]] if other == "convex" else pts[[0, 1, 0]]
         d = n + rng.normal(size=3) * 0.01
         d /= np.linalg.norm(d)
-        k = G._crossing_test(sa, sb, table.verts, np.ascontiguousarray(rot), pos_b, True,
+        k = G._crossing_test(sa, sb, table.verts, np.ascontiguousarray(rot), pos_b,
                              scale, ws, 0, d[0], d[1], d[2])
         if outside:
             assert k == -1

@@ -175,27 +175,28 @@ def _point_cylinder(rr, h, c0, c1, c2):
     """A point c against the cylinder core (radius rr, half height h, axis z, its
     frame): signed core distance and unit normal from the point towards the cylinder.
     The closest point of a solid of revolution to a point lies in the point's meridian
-    plane, so this is a point against the rectangle [0, rr] x [-h, h] in (rho, z);
-    inside, the nearest of the side and the two caps."""
+    plane, so this is a point against the rectangle [0, rr] x [-h, h] in (rho, z):
+    beyond the side only (the gap rho - rr along the radial line), beyond a cap only
+    (|z| - h along z), beyond both (the rim: the one case that needs a second square
+    root); inside, the nearest of the side and the two caps."""
     rho = math.sqrt(c0 * c0 + c1 * c1)
-    if rho > 0.0:
-        ux, uy = c0 / rho, c1 / rho
-    else:
-        ux, uy = 1.0, 0.0
-    if rho <= rr and abs(c2) <= h:
+    dz = abs(c2) - h
+    sz = -1.0 if c2 >= 0.0 else 1.0
+    if rho <= rr:
+        if dz > 0.0:
+            return dz, 0.0, 0.0, sz
         g_side = rr - rho
-        g_cap = h - abs(c2)
-        if g_side < g_cap:
-            return -g_side, -ux, -uy, 0.0
-        return -g_cap, 0.0, 0.0, -1.0 if c2 >= 0.0 else 1.0
-    if rho > rr:
-        q0, q1 = rr * ux, rr * uy
-    else:
-        q0, q1 = c0, c1
-    q2 = min(h, max(-h, c2))
-    d0, d1, d2 = q0 - c0, q1 - c1, q2 - c2
-    core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    return core, d0 / core, d1 / core, d2 / core
+        if g_side < -dz:
+            if rho > 0.0:
+                return -g_side, -c0 / rho, -c1 / rho, 0.0
+            return -g_side, -1.0, 0.0, 0.0
+        return dz, 0.0, 0.0, sz
+    ux, uy = c0 / rho, c1 / rho
+    dr = rho - rr
+    if dz <= 0.0:
+        return dr, -ux, -uy, 0.0
+    core = math.sqrt(dr * dr + dz * dz)
+    return core, -ux * (dr / core), -uy * (dr / core), sz * (dz / core)
 
 
 @njit_inline

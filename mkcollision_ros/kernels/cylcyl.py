@@ -62,7 +62,7 @@ other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
 import math
 
 from .constants import CYLINDER, EPA_REL_TOL, P_ROLL
-from .geometry import cylinder_inradius, minkowski_support_xyz
+from .geometry import cylinder_inradius, minkowski_core_xyz
 from .jit import njit_inline, njit_kernel
 
 CC_NEWTON_ITERS = 8     # Newton steps on a rim's angle (~4 taken on average)
@@ -303,8 +303,7 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     # the deepest rim point: h along the other's side normal there (one support)
     q = math.sqrt(rpx * rpx + rpy * rpy)
     nx, ny, nz = _side_normal(rim_side, r_ab, rpx / q, rpy / q)
-    ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(sa, sb, verts, r_ab, t_ab,
-                                                         nx, ny, nz, True)
+    ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(sa, sb, verts, r_ab, t_ab, nx, ny, nz)
     h = nx * (ax_ - bx_) + ny * (ay_ - by_) + nz * (az_ - bz_)
     if not (h > 0.0 and rim_d >= h - tol):
         return 0.0

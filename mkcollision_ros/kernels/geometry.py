@@ -284,19 +284,37 @@ def minkowski_support(sa, sb, verts, r_ab, t_ab, d, core, wa, wb, w):
 
 
 @njit_inline
-def minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core):
-    """Allocation-free ``minkowski_support``: for the direction (dx, dy, dz) in A's
-    frame returns the support points of A and of B (both in A's frame) as six floats
-    (ax, ay, az, bx, by, bz); the Minkowski difference point is a - b."""
+def minkowski_core_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz):
+    """Allocation-free ``minkowski_support`` on the cores (GJK and EPA): for the
+    direction (dx, dy, dz) in A's frame returns the support points of A's core and of
+    B's core (both in A's frame) as six floats (ax, ay, az, bx, by, bz); the Minkowski
+    difference point is a - b.
+
+    Two functions, not one with a ``core`` flag: numba inlines IR before it prunes a
+    branch on a constant flag, so every inlined copy carried both branches (six shape
+    switches, where GJK and EPA use two), and the inliner copies a callee's IR once per
+    call site, which made the first compile half again as long.  For the same reason
+    the two write out their frame maps rather than share an inlined helper: each level
+    of inlining is copied again at every site above it."""
     ex = -(r_ab[0, 0] * dx + r_ab[1, 0] * dy + r_ab[2, 0] * dz)
     ey = -(r_ab[0, 1] * dx + r_ab[1, 1] * dy + r_ab[2, 1] * dz)
     ez = -(r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz)
-    if core:
-        ax, ay, az = support_core_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
-        px, py, pz = support_core_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
-    else:
-        ax, ay, az = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
-        px, py, pz = support_full_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
+    ax, ay, az = support_core_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
+    px, py, pz = support_core_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
+    bx = r_ab[0, 0] * px + r_ab[0, 1] * py + r_ab[0, 2] * pz + t_ab[0]
+    by = r_ab[1, 0] * px + r_ab[1, 1] * py + r_ab[1, 2] * pz + t_ab[1]
+    bz = r_ab[2, 0] * px + r_ab[2, 1] * py + r_ab[2, 2] * pz + t_ab[2]
+    return ax, ay, az, bx, by, bz
+
+
+@njit_inline
+def minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz):
+    """``minkowski_core_xyz`` on the whole (inflated) shapes, for MPR."""
+    ex = -(r_ab[0, 0] * dx + r_ab[1, 0] * dy + r_ab[2, 0] * dz)
+    ey = -(r_ab[0, 1] * dx + r_ab[1, 1] * dy + r_ab[2, 1] * dz)
+    ez = -(r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz)
+    ax, ay, az = support_full_xyz(sa[0], sa[1], verts, sa[2], sa[3], dx, dy, dz)
+    px, py, pz = support_full_xyz(sb[0], sb[1], verts, sb[2], sb[3], ex, ey, ez)
     bx = r_ab[0, 0] * px + r_ab[0, 1] * py + r_ab[0, 2] * pz + t_ab[0]
     by = r_ab[1, 0] * px + r_ab[1, 1] * py + r_ab[1, 2] * pz + t_ab[1]
     bz = r_ab[2, 0] * px + r_ab[2, 1] * py + r_ab[2, 2] * pz + t_ab[2]

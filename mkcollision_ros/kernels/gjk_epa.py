@@ -192,7 +192,7 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
 from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
                      segment_cylinder_depth, sides_crossing)
-from .geometry import (borrow_args, cylinder_inradius, inflation, meet, minkowski_support_xyz,
+from .geometry import (borrow_args, cylinder_inradius, inflation, meet, minkowski_core_xyz,
                        shape_scale)
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -509,8 +509,8 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
 
 
 @njit_inline
-def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
-    """GJK loop on the cores (``core`` True) or the full shapes.
+def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
+    """GJK loop on the cores (geometry.minkowski_core_xyz).
 
     Writes into the workspace ``ws``: W, WA, WB float64 (4, 3), the simplex of A - B and
     the support points of A and B (A's frame), lam (4,) barycentric weights, v (3,) the
@@ -543,8 +543,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
             d[c] = t_ab[c]
     else:
         d[0], d[1], d[2] = 1.0, 0.0, 0.0
-    ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-        sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], core)
+    ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+        sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
     wa[0], wa[1], wa[2] = ax_, ay_, az_
     wb[0], wb[1], wb[2] = bx_, by_, bz_
     w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -589,8 +589,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
         it += 1
         for c in range(3):
             d[c] = -v[c]
-        ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-            sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], core)
+        ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+            sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
         wa[0], wa[1], wa[2] = ax_, ay_, az_
         wb[0], wb[1], wb[2] = bx_, by_, bz_
         w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -605,7 +605,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
             inv = 1.0 / math.sqrt(vv)
             if face_left > 0:
                 # near a box's face normal or a cylinder's axis (within EPA_KINK_NEAR)
-                k_f = _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
+                k_f = _face_polish(sa, sb, verts, r_ab, t_ab, scale, ws,
                                    d[0] * inv, d[1] * inv, d[2] * inv)
                 if k_f != 0:
                     face_left -= 1
@@ -633,10 +633,10 @@ def _gjk(sa, sb, verts, r_ab, t_ab, core, scale, ws, stop, polish):
                     crease_early = False
                     for c in range(3):
                         d[c] *= inv
-                    k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
+                    k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws,
                                          kc // 3, kc % 3)
                 elif last and kc == -1 and _gjk_newton_pair(sa[0], sb[0]):
-                    k_pol = _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
+                    k_pol = _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws,
                                                min(nsamp, 4), d[0] * inv, d[1] * inv,
                                                d[2] * inv, w[0], w[1], w[2], wa[0], wa[1],
                                                wa[2])
@@ -730,7 +730,7 @@ def _fallback_normal(t_ab, nrm):
 
 
 @njit_kernel
-def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
+def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n):
     """Grow a simplex W[:n] holding the origin to a tetrahedron by supports of the full
     shapes along directions normal to its affine hull.  Returns the new count (4), or
     -1 when the Minkowski difference is flat there (touching, depth 0); on -1 the unit
@@ -788,8 +788,8 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, core):
                 continue
             for c in range(3):
                 d[c] = cand[k, c] / dn
-            ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], core)
+            ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
             wa[0], wa[1], wa[2] = ax_, ay_, az_
             wb[0], wb[1], wb[2] = bx_, by_, bz_
             w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -873,7 +873,7 @@ def _tangent_basis(nx, ny, nz):
 
 
 @njit_kernel
-def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws):
+def _polish_min_support(sa, sb, verts, r_ab, t_ab, scale, ud, uwa, ub, ws):
     """Pattern search for min over unit u of h_{A-B}(u) starting at ``ud`` (3,) with
     value ``ub``; updates ud and uwa (A's support point) in place, returns the value."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
@@ -893,8 +893,8 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
             dn = math.sqrt(_dot(d, d))
             for c in range(3):
                 d[c] /= dn
-            ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], core)
+            ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
             wa[0], wa[1], wa[2] = ax_, ay_, az_
             wb[0], wb[1], wb[2] = bx_, by_, bz_
             w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -925,7 +925,7 @@ def _store_min(fs, nx, ny, nz, wx, wy, wz, ax, ay, az, bx, by, bz):
 
 
 @njit_kernel
-def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, nz,
+def _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
                         wx, wy, wz, ax, ay, az):
     """Newton's method for min over unit u of h(u) = h_{A-B}(u), from the unit direction
     n = (nx, ny, nz) with its support point w of A - B and a of A, given ``ns`` samples
@@ -1007,8 +1007,8 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
         mz = nz + s1 * e1z + s2 * e2z
         inv = 1.0 / math.sqrt(mx * mx + my * my + mz * mz)
         mx, my, mz = mx * inv, my * inv, mz * inv
-        pax, pay, paz, pbx, pby, pbz = minkowski_support_xyz(
-            sa, sb, verts, r_ab, t_ab, mx, my, mz, core)
+        pax, pay, paz, pbx, pby, pbz = minkowski_core_xyz(
+            sa, sb, verts, r_ab, t_ab, mx, my, mz)
         qx, qy, qz = pax - pbx, pay - pby, paz - pbz
         hn = mx * qx + my * qy + mz * qz
         if not hn <= h + 1e-12 * scale:
@@ -1022,7 +1022,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, 
 
 
 @njit_kernel
-def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
+def _epa_polish(sa, sb, verts, r_ab, t_ab, scale, ws, f):
     """_newton_min_support started at the normal of EPA's best face f, whose support
     point (ws t3 rows 8-11: d, wa, wb, w) is at hand; its first samples are the face's
     vertices (EPA stored the direction of each, VD).  Same return and results."""
@@ -1041,7 +1041,7 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, f):
                 PN[ns, c] = VD[i, c]
                 PW[ns, c] = V[i, c]
             ns += 1
-    return _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns,
+    return _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns,
                                d[0], d[1], d[2], w[0], w[1], w[2], wa[0], wa[1], wa[2])
 
 
@@ -1119,16 +1119,16 @@ def _kink_side(sa, sb, r_ab, dx, dy, dz, apart):
 
 
 @njit_kernel
-def _support_called(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core):
-    """minkowski_support_xyz called, not inlined: for the crease search, which runs on
+def _support_called(sa, sb, verts, r_ab, t_ab, dx, dy, dz):
+    """minkowski_core_xyz called, not inlined: for the crease search, which runs on
     few pairs and evaluates few supports, where every inlined copy of all the shapes'
     support mappings lengthened the first compile."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
-    return minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz, core)
+    return minkowski_core_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz)
 
 
 @njit_kernel
-def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
+def _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, dx, dy, dz):
     """Secant search for the minimum of h = h_{A-B} along the great circle of
     directions normal to the unit axis k (a crease of a cylinder's or a capsule core's
     support function), from the direction d projected onto it.
@@ -1159,7 +1159,7 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
         ct, st = math.cos(t), math.sin(t)
         ux, uy, uz = ct * nx + st * ex, ct * ny + st * ey, ct * nz + st * ez
         pax, pay, paz, pbx, pby, pbz = _support_called(
-            sa, sb, verts, r_ab, t_ab, ux, uy, uz, core)
+            sa, sb, verts, r_ab, t_ab, ux, uy, uz)
         qx, qy, qz = pax - pbx, pay - pby, paz - pbz
         hu = ux * qx + uy * qy + uz * qz
         hlow = min(hlow, hu)
@@ -1183,18 +1183,17 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz):
 
 
 @njit_inline
-def _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz, cmin, lim):
+def _deeper_near(sa, sb, verts, r_ab, t_ab, px, py, pz, ux, uy, uz, cmin, lim):
     """(evaluated, deeper): whether the unit direction p lies within acos(cmin) of u (one
     support is then evaluated there), and whether h(p) < ``lim`` there."""
     if px * ux + py * uy + pz * uz < cmin:
         return 0, False
-    pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab, px, py, pz,
-                                                   core)
+    pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab, px, py, pz)
     return 1, px * (pax - pbx) + py * (pay - pby) + pz * (paz - pbz) < lim
 
 
 @njit_inline
-def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
+def _kink_points(sa, sb, verts, r_ab, t_ab, ux, uy, uz, lim):
     """Whether h reaches below ``lim`` at a point kink of h within EPA_POLISH_CAP of the
     direction u, for a pair of cylinders: the two cap normals of each and the two
     directions where their creases cross.  Returns (found, supports evaluated)."""
@@ -1214,7 +1213,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
             px, py, pz = ox, oy, oz
         if m % 2 == 1:
             px, py, pz = -px, -py, -pz
-        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz,
+        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, px, py, pz, ux, uy, uz,
                                   cmin, lim)
         nev += ev
         if deeper:
@@ -1223,7 +1222,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, lim):
 
 
 @njit_inline
-def _box_faces_deeper(sa, sb, verts, r_ab, t_ab, core, side, axis, ux, uy, uz, lim):
+def _box_faces_deeper(sa, sb, verts, r_ab, t_ab, side, axis, ux, uy, uz, lim):
     """Whether h reaches below ``lim`` at one of the four face normals of a box (A's if
     side == 0, else B's) on the circle of directions normal to its axis ``axis``, within
     EPA_POLISH_CAP of the unit direction u.  Returns (found, supports evaluated)."""
@@ -1234,7 +1233,7 @@ def _box_faces_deeper(sa, sb, verts, r_ab, t_ab, core, side, axis, ux, uy, uz, l
         px, py, pz = _axis_of(side, j, r_ab)
         if m % 2 == 1:
             px, py, pz = -px, -py, -pz
-        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, core, px, py, pz, ux, uy, uz,
+        ev, deeper = _deeper_near(sa, sb, verts, r_ab, t_ab, px, py, pz, ux, uy, uz,
                                   cmin, lim)
         nev += ev
         if deeper:
@@ -1291,7 +1290,7 @@ def _hull_top3(pts, dx, dy, dz):
 
 
 @njit_kernel
-def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
+def _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, dx, dy, dz):
     """The minimum of h = h_{A-B} at a convex hull's feature near the unit direction d
     (GJK's direction), for a hull against an ellipsoid (_hull_side; the
     hull on ``side``) with the cores apart: the face test on the face through the three
@@ -1331,7 +1330,7 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
     pts = verts[v0:v0 + vn]
     hx, hy, hz = _hull_dir(side, r_ab, dx, dy, dz)
     i, j, m, p1, p2, _ = _hull_top3(pts, hx, hy, hz)
-    k_f = _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m,
+    k_f = _hull_face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, i, j, m,
                           hx, hy, hz)
     if k_f > 0:
         return 1, False
@@ -1347,7 +1346,7 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, dx, dy, dz):
         kx = r_ab[0, 0] * ex + r_ab[0, 1] * ey + r_ab[0, 2] * ez
         ky = r_ab[1, 0] * ex + r_ab[1, 1] * ey + r_ab[1, 2] * ez
         kz = r_ab[2, 0] * ex + r_ab[2, 1] * ey + r_ab[2, 2] * ez
-    r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, dx, dy, dz)
+    r = _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, dx, dy, dz)
     ok, nev, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz = r
     nev += abs(k_f)
     if not (ok and hu <= hlow + 1e-12 * scale):
@@ -1381,7 +1380,7 @@ _SIN_CAP = math.sin(EPA_POLISH_CAP)
 
 
 @njit_kernel
-def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
+def _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, axis):
     """Minimum of h(u) = h_{A-B}(u) over the great circle of directions normal to the
     axis of a cylinder or a capsule (z), or to a box's axis ``axis`` (A's if side == 0,
     else B's), from EPA's best face normal d (ws t3 row 8), by _crease_min; then checks
@@ -1431,7 +1430,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     d = fs[_T3 + 8]
     tol = EPA_REL_TOL * scale
     kx, ky, kz = _axis_of(side, axis, r_ab)
-    r = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, kx, ky, kz, d[0], d[1], d[2])
+    r = _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, d[0], d[1], d[2])
     nev = r[1]
     ok = False
     pax = pay = paz = pbx = pby = pbz = 0.0
@@ -1450,7 +1449,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
     # (EPA_POLISH_CAP) of the minimum found: farther, _polish_is_global's test covers
     # it (cylinder-cylinder deep pairs 20.5 -> 19.8 steps, pure-Python count)
     if both and not (r[0] and abs(r[4] * ox + r[5] * oy + r[6] * oz) > _SIN_CAP):
-        r2 = _crease_min(sa, sb, verts, r_ab, t_ab, core, scale, ox, oy, oz,
+        r2 = _crease_min(sa, sb, verts, r_ab, t_ab, scale, ox, oy, oz,
                          d[0], d[1], d[2])
         nev += r2[1]
         if r2[0] and (not r[0] or r2[3] < r[3]):
@@ -1467,13 +1466,13 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, axis):
         return -nev
     hu, ux, uy, uz = r[3], r[4], r[5], r[6]
     if (sa[0] if side == 0 else sb[0]) == BOX:
-        found, nk = _box_faces_deeper(sa, sb, verts, r_ab, t_ab, core, side, axis,
+        found, nk = _box_faces_deeper(sa, sb, verts, r_ab, t_ab, side, axis,
                                       ux, uy, uz, hu - tol)
         nev += nk
         if found:
             return -nev
     if both:
-        found, nk = _kink_points(sa, sb, verts, r_ab, t_ab, core, ux, uy, uz, hu - tol)
+        found, nk = _kink_points(sa, sb, verts, r_ab, t_ab, ux, uy, uz, hu - tol)
         nev += nk
         if found:
             return -nev
@@ -1563,13 +1562,13 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap, first):
 
 
 @njit_inline
-def _face_point(sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz):
+def _face_point(sa, sb, verts, r_ab, t_ab, side, nx, ny, nz):
     """One support of A - B along the unit direction n (A's frame), the outward normal
     of a face of the shape on ``side`` (A's face: n; B's: -n in B's own terms).
     Returns h = n . (a - b), the other shape's support point in the face shape's frame
     (3), and the support points a and b (A's frame, 3 each)."""
     pax, pay, paz, pbx, pby, pbz = _support_called(sa, sb, verts, r_ab, t_ab,
-                                                   nx, ny, nz, core)
+                                                   nx, ny, nz)
     h = nx * (pax - pbx) + ny * (pay - pby) + nz * (paz - pbz)
     if side == 0:
         qx, qy, qz = pbx, pby, pbz
@@ -1623,7 +1622,7 @@ def _crossing_pair(ca, cb):
 
 
 @njit_kernel
-def _crossing_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, best, dx, dy, dz):
+def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
     """Whether the minimum of h = h_{A-B} is exactly where a cylinder's side crosses
     the other shape's segment (a cylinder's side, or a convex hull's edge) near EPA's
     best face normal d (a _crossing_pair; the hull's edge through two of the best
@@ -1868,7 +1867,7 @@ def _pending_bound(sa, sb, r_ab, t_ab, fs, tol):
 
 
 @njit_inline
-def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
+def _face_polish(sa, sb, verts, r_ab, t_ab, scale, ws, dx, dy, dz):
     """Whether the minimum of h = h_{A-B} is exactly at the normal of a box's face or a
     cylinder's cap near the unit direction d (EPA's best face normal, within
     EPA_KINK_NEAR rad of it), for a _face_pair (GJK) or an _epa_face_pair (EPA).
@@ -1918,13 +1917,13 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, dx, dy, dz):
                 k = axis
         if not cbest * cbest > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
             continue
-        return _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k,
+        return _face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, k,
                           sg * (1.0 if cbest > 0.0 else -1.0))
     return 0
 
 
 @njit_kernel
-def _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k, s):
+def _face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, k, s):
     """_face_polish's test at the face normal s * axis k of the box or cylinder on
     ``side`` (s = +-1): 1 if it is a minimum (results in ws t3 rows 15-18, the cap it
     proves in row 3: _face_basin), else -1."""
@@ -1935,7 +1934,7 @@ def _face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, k, s):
     kx, ky, kz = _axis_of(side, k, r_ab)
     nx, ny, nz = s * kx, s * ky, s * kz
     h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
-        sa, sb, verts, r_ab, t_ab, core, side, nx, ny, nz)
+        sa, sb, verts, r_ab, t_ab, side, nx, ny, nz)
     prm = sa[1] if side == 0 else sb[1]
     # the radius of the largest disc about q's foot inside the face
     if code == BOX:
@@ -1981,7 +1980,7 @@ def _face_basin(rin, h):
 
 
 @njit_kernel
-def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, hx, hy,
+def _hull_face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, i, j, m, hx, hy,
                     hz):
     """_face_polish on a convex hull (the shape on ``side``; (hx, hy, hz) GJK's
     direction in the hull's frame, i, j, m the three highest vertices along it):
@@ -2024,7 +2023,7 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, i, j, m, h
         uy = -(r_ab[1, 0] * nx + r_ab[1, 1] * ny + r_ab[1, 2] * nz)
         uz = -(r_ab[2, 0] * nx + r_ab[2, 1] * ny + r_ab[2, 2] * nz)
     h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
-        sa, sb, verts, r_ab, t_ab, core, side, ux, uy, uz)
+        sa, sb, verts, r_ab, t_ab, side, ux, uy, uz)
     eps = 1e-7 * scale
     for e in range(3):
         a_ = i if e == 0 else (j if e == 1 else m)
@@ -2095,7 +2094,7 @@ def _gjk_newton_pair(ca, cb):
 
 
 @njit_kernel
-def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, nz,
+def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
                        wx, wy, wz, ax, ay, az):
     """GJK's polish near the end on cores apart, away from the creases _kink_side
     finds: _newton_min_support (same arguments and return), but between a convex hull
@@ -2107,12 +2106,12 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns, nx, ny, n
     sphere-convex; bench/ab_deep.py, identical results)."""
     side = _hull_side(sa[0], sb[0])
     if side < 0:
-        return _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns,
+        return _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns,
                                    nx, ny, nz, wx, wy, wz, ax, ay, az)
-    k, vertex = _hull_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, side, nx, ny, nz)
+    k, vertex = _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, nx, ny, nz)
     if not vertex:
         return k
-    kn = _newton_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ws, ns,
+    kn = _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns,
                              nx, ny, nz, wx, wy, wz, ax, ay, az)
     return kn + abs(k) if kn > 0 else kn - abs(k)
 
@@ -2128,7 +2127,7 @@ def _edge_of(F, g, a, b):
 
 
 @njit_kernel
-def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
+def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
     holds the origin; W, WA, WB of the workspace ``ws``).  Writes ws[1][_RES:_RES + 10] (10,) =
     [depth, nx, ny, nz, pa(3), pb(3)] (normal =
@@ -2266,8 +2265,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             break
         for c in range(3):
             d[c] = FN[best, c]
-        ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-            sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], core)
+        ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+            sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
         wa[0], wa[1], wa[2] = ax_, ay_, az_
         wb[0], wb[1], wb[2] = bx_, by_, bz_
         w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -2289,12 +2288,12 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
             # crosses another segment (a flat face of A - B): is the minimum on it?
             k_f = 0
             if face_left > 0:
-                k_f = _face_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, d[0], d[1],
+                k_f = _face_polish(sa, sb, verts, r_ab, t_ab, scale, ws, d[0], d[1],
                                    d[2])
                 face_left -= abs(k_f)
                 n_pol += abs(k_f)
             if cross_left > 0 and k_f <= 0:
-                k_f = _crossing_test(sa, sb, verts, r_ab, t_ab, core, scale, ws, best,
+                k_f = _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best,
                                      d[0], d[1], d[2])
                 cross_left -= abs(k_f)
                 n_pol += abs(k_f)
@@ -2324,10 +2323,10 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
                 tries -= 1
                 polish_at *= 0.01
                 if kc >= 0:
-                    k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws,
+                    k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws,
                                          kc // 3, kc % 3)
                 else:
-                    k_pol = _epa_polish(sa, sb, verts, r_ab, t_ab, core, scale, ws, best)
+                    k_pol = _epa_polish(sa, sb, verts, r_ab, t_ab, scale, ws, best)
                 n_pol += abs(k_pol)
                 if k_pol > 0:
                     pend = True
@@ -2494,7 +2493,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws, core):
     if not converged and ub < np.inf:
         # caps hit (a valley of equally deep directions, e.g. a point on a cone's axis):
         # polish the upper bound h(ud) by a pattern search over directions, report it
-        ub = _polish_min_support(sa, sb, verts, r_ab, t_ab, core, scale, ud, uwa, ub, ws)
+        ub = _polish_min_support(sa, sb, verts, r_ab, t_ab, scale, ud, uwa, ub, ws)
         res[0] = ub
         for c in range(3):
             res[1 + c] = ud[c]
@@ -2521,7 +2520,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     t2 = ws[0][_T3 + 13]
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
-    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, True, scale, ws, math.inf, False)
+    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False)
     if flag != _GJK_APART:
         return 0
     fs, fv = ws[0], ws[1]
@@ -2624,7 +2623,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         if d > 0.0 or (d < 0.0 and -d - ra - rb > max(cutoff, TOUCH_TOL * scale)):
             return _core_out(out, res, ra, rb, pa, pb, 1, scale)
     # phase 1: cores
-    n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, True, scale, ws,
+    n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
                               ra + rb + max(cutoff, TOUCH_TOL * scale),
                               _gjk_newton_pair(sa[0], sb[0])
                               or _has_crease(sa[0]) or _has_crease(sb[0]))
@@ -2676,8 +2675,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             d, wa, wb, w = ws[0][_T3 + 4], ws[0][_T3 + 5], ws[0][_T3 + 6], ws[0][_T3 + 7]
             for c in range(3):
                 d[c] = -v[c]
-            ax_, ay_, az_, bx_, by_, bz_ = minkowski_support_xyz(
-                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2], True)
+            ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
+                sa, sb, verts, r_ab, t_ab, d[0], d[1], d[2])
             wa[0], wa[1], wa[2] = ax_, ay_, az_
             wb[0], wb[1], wb[2] = bx_, by_, bz_
             w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
@@ -2687,7 +2686,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.
     if n < 4:
-        n = _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n, True)
+        n = _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n)
         if n < 0:
             # flat core difference through the origin: core depth 0, normal across it
             for c in range(3):
@@ -2709,7 +2708,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
                             scale)
     for c in range(10):
         res[c] = 0.0
-    it, conv, gap, clean = _epa(sa, sb, verts, r_ab, t_ab, scale, ws, True)
+    it, conv, gap, clean = _epa(sa, sb, verts, r_ab, t_ab, scale, ws)
     iters += it
     if not clean and math.isfinite(res[0]):
         # witnesses off the best face, or the caps' pattern-searched bound (its support

@@ -27,12 +27,24 @@ the cache lives in a folder named after a hash of every kernel source file:
 ``$XDG_CACHE_HOME/mkcollision_ros/numba-<hash>`` (default ``~/.cache``).  Any edit gives
 a fresh folder; an unchanged install reuses its compiled kernels.  Setting
 ``NUMBA_CACHE_DIR`` overrides this.
+
+First compile: numba's inliner deep-copies a callee's IR at every call site of an
+``njit_inline`` function (and again for each level of nesting), millions of short-lived
+Python objects, and Python's cyclic garbage collector ran its young-generation passes
+over them every 700 allocations.  While numba compiles, a listener on numba's
+``numba:compile`` event (numba's documented event API) raises the first threshold to
+100,000 and gen1's to 20, and puts the old thresholds back when the outermost compile
+ends; any compile in the process gets it (the node's warm-up, the first call of
+``collide``, the tests).  Measured (the first ``collide_batch`` call, empty cache, nothing
+else running): 382 -> 265 s, peak memory the same (1.7 GB); with the collector off
+altogether 245 s but 5.4 GB.
 """
+import gc
 import hashlib
 import os
 
 import numba
-from numba.core import cgutils, types
+from numba.core import cgutils, event, types
 from numba.extending import intrinsic
 
 
@@ -49,6 +61,33 @@ def _kernel_cache_dir():
 
 if not os.environ.get("NUMBA_CACHE_DIR"):
     numba.config.CACHE_DIR = _kernel_cache_dir()
+
+COMPILE_GC_THRESHOLDS = (100_000, 20, 10)
+
+
+class _FewerGcPassesWhileCompiling(event.Listener):
+    """Python's collector thresholds raised to COMPILE_GC_THRESHOLDS from the start of
+    the outermost numba compile to its end (nested compiles of called kernels run
+    inside it; numba holds its compiler lock throughout, so one thread at a time)."""
+
+    def __init__(self):
+        self._depth = 0
+        self._saved = gc.get_threshold()
+
+    def on_start(self, ev):
+        if self._depth == 0:
+            self._saved = gc.get_threshold()
+            gc.set_threshold(*COMPILE_GC_THRESHOLDS)
+        self._depth += 1
+
+    def on_end(self, ev):
+        self._depth -= 1
+        if self._depth == 0:
+            gc.set_threshold(*self._saved)
+
+
+if not numba.config.DISABLE_JIT:
+    event.register("numba:compile", _FewerGcPassesWhileCompiling())
 
 njit_kernel = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")
 njit_parallel = numba.njit(cache=True, fastmath=False, nogil=True, parallel=True,

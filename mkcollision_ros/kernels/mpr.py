@@ -3,7 +3,7 @@ penetration depth, on the whole (inflated) shapes.
 
 Reference: G. Snethen, "XenoCollide: Complex Collision Made Simple", Game Programming
 Gems 7, 2008.  MPR works on the Minkowski difference D = A - B (A's frame, support from
-geometry.minkowski_support with core=False): the shapes overlap iff the origin lies in D.
+geometry.minkowski_full_xyz): the shapes overlap iff the origin lies in D.
 
 Phases
   1. Origin ray.  v0 = centre(A) - centre(B) is inside D (centres from
@@ -46,7 +46,7 @@ from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, ST_FAILED,
                         ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
-from .geometry import borrow_args, centre_core, minkowski_support_xyz, shape_scale
+from .geometry import borrow_args, centre_core, minkowski_full_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
 
 # The working rows are w, wa, wb (5, 3): support points of D = A - B and of A and B,
@@ -67,8 +67,7 @@ def _cross_rows(w, i, j, k):
 @njit_inline
 def _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k):
     """Support of D along (dx, dy, dz) into row ``k`` of w, wa, wb; returns w[k] . d."""
-    ax, ay, az, bx, by, bz = minkowski_support_xyz(sa, sb, verts, r_ab, t_ab, dx, dy,
-                                                   dz, False)
+    ax, ay, az, bx, by, bz = minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz)
     wa[k, 0], wa[k, 1], wa[k, 2] = ax, ay, az
     wb[k, 0], wb[k, 1], wb[k, 2] = bx, by, bz
     w[k, 0], w[k, 1], w[k, 2] = ax - bx, ay - by, az - bz

@@ -329,16 +329,19 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
         if half_space or sphere_a or sphere_b or capsules:
             scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]),
                                 (code_b, prm_b, vr_b[0], vr_b[1]))
-            if half_space and code_b == PLANE:
-                dist = _half_space_world(code_a, prm_a, vr_a, verts, pos_a, quat_a, prm_b,
-                                         pos_b, quat_b, True, out)
-            elif half_space:
-                dist = _half_space_world(code_b, prm_b, vr_b, verts, pos_b, quat_b, prm_a,
-                                         pos_a, quat_a, False, out)
-            elif sphere_a:
-                dist = sphere_world(prm_a, code_b, prm_b, pos_a, pos_b, quat_b, True, out)
-            elif sphere_b:
-                dist = sphere_world(prm_b, code_a, prm_a, pos_b, pos_a, quat_a, False, out)
+            # one call site each, its roles picked by the order (an inlined copy of
+            # each closed form fewer for the first compile)
+            a_first = code_b == PLANE if half_space else sphere_a
+            code_s, code_o = (code_a, code_b) if a_first else (code_b, code_a)
+            prm_s, prm_o = (prm_a, prm_b) if a_first else (prm_b, prm_a)
+            pos_s, pos_o = (pos_a, pos_b) if a_first else (pos_b, pos_a)
+            quat_s, quat_o = (quat_a, quat_b) if a_first else (quat_b, quat_a)
+            if half_space:
+                vr_s = vr_a if a_first else vr_b
+                dist = _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_o,
+                                         pos_o, quat_o, a_first, out)
+            elif sphere_a or sphere_b:
+                dist = sphere_world(prm_s, code_o, prm_o, pos_s, pos_o, quat_o, a_first, out)
             else:
                 dist = capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b,
                                              scale, out)

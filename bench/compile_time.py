@@ -1,0 +1,90 @@
+"""Where the first compile goes: the first ``collide_batch`` call (what
+``bench/narrowphase.py``'s start-up row times) in a fresh, empty numba cache, with the
+time numba spent compiling each kernel, from numba's ``numba:compile`` events.
+
+    PYTHONPATH=. .venv/bin/python bench/compile_time.py [--top 30]
+
+"own s" is a kernel's compile less that of the kernels it calls that are compiled as
+functions of their own (nested ``numba:compile`` events); what is inlined into it
+(``njit_inline``) counts as its own.  A kernel listed with more than one compile was
+typed for more than one signature (e.g. an integer argument seen once as a literal
+constant).  Takes 4-10 minutes; run it with nothing else on the machine.
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+CHILD = r"""
+import sys, time
+from numba.core import event
+
+
+class Timer(event.Listener):
+    def __init__(self):
+        self.stack, self.rows = [], []
+
+    def on_start(self, ev):
+        d = ev.data or {}
+        name = d["dispatcher"].py_func.__qualname__ if "dispatcher" in d else "?"
+        self.stack.append([time.perf_counter(), name, 0.0])
+
+    def on_end(self, ev):
+        t0, name, inner = self.stack.pop()
+        dt = time.perf_counter() - t0
+        self.rows.append((name, dt, dt - inner))
+        if self.stack:
+            self.stack[-1][2] += dt
+
+
+timer = Timer()
+event.register("numba:compile", timer)
+t0 = time.perf_counter()
+import numpy as np
+from mkcollision_ros.shapes import build_table
+from mkcollision_ros.kernels.narrowphase import collide_batch
+tb = build_table([{"type": "sphere", "radius": 0.5}, {"type": "box", "size": [1, 1, 1]}])
+out = np.zeros((1, 12)); st = np.zeros(1, np.int64)
+collide_batch(tb.codes, tb.params, tb.vrange, tb.verts, np.array([[0, 1]]),
+              np.array([[0, 0, 0], [0.9, 0, 0.]]), np.tile([0, 0, 0, 1.], (2, 1)), 0, 0.0,
+              out, st)
+print("TOTAL", time.perf_counter() - t0)
+for name, incl, own in timer.rows:
+    print("ROW", name, incl, own)
+"""
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--top", type=int, default=30, help="kernels listed (by own time)")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache,
+                   PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        w0 = time.perf_counter()
+        r = subprocess.run([sys.executable, "-c", CHILD], env=env, cwd=ROOT,
+                           capture_output=True, text=True, check=True)
+        wall = time.perf_counter() - w0
+    total, agg = 0.0, {}
+    for line in r.stdout.splitlines():
+        parts = line.split()
+        if parts[0] == "TOTAL":
+            total = float(parts[1])
+        elif parts[0] == "ROW":
+            a = agg.setdefault(parts[1], [0, 0.0, 0.0])
+            a[0] += 1
+            a[1] += float(parts[2])
+            a[2] += float(parts[3])
+    print(f"first collide_batch call, empty cache: {total:.1f} s (process wall {wall:.1f} s)\n")
+    print("| kernel | own s | with its called kernels s | compiles |")
+    print("|---|---|---|---|")
+    for name, (n, incl, own) in sorted(agg.items(), key=lambda kv: -kv[1][2])[:args.top]:
+        print(f"| {name} | {own:.1f} | {incl:.1f} | {n} |")
+
+
+if __name__ == "__main__":
+    main()

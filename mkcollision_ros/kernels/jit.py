@@ -35,9 +35,10 @@ over them every 700 allocations.  While numba compiles, a listener on numba's
 ``numba:compile`` event (numba's documented event API) raises the first threshold to
 100,000 and gen1's to 20, and puts the old thresholds back when the outermost compile
 ends; any compile in the process gets it (the node's warm-up, the first call of
-``collide``, the tests).  Measured (the first ``collide_batch`` call, empty cache, nothing
-else running): 382 -> 265 s, peak memory the same (1.7 GB); with the collector off
-altogether 245 s but 5.4 GB.
+``collide``, the tests).  Measured on the first ``collide_batch`` call in an empty cache
+(BENCHMARKS.md, session 30): 382 s (with a pure-Python test run beside it) -> 265 s
+(nothing beside it), peak memory the same (1.7 GB); with the collector off altogether
+245 s but 5.4 GB; ``mpr_ws`` compiled alone, 40 -> 28 s with the collector off.
 """
 import gc
 import hashlib

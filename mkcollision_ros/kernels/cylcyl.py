@@ -530,14 +530,20 @@ def _cap_normal(side, r_ab, s):
 
 
 @njit_inline
+def _b_to_a_point(r_ab, t_ab, x, y, z):
+    """A point of B's frame in A's frame: r_ab p + t_ab."""
+    return (r_ab[0, 0] * x + r_ab[0, 1] * y + r_ab[0, 2] * z + t_ab[0],
+            r_ab[1, 0] * x + r_ab[1, 1] * y + r_ab[1, 2] * z + t_ab[1],
+            r_ab[2, 0] * x + r_ab[2, 1] * y + r_ab[2, 2] * z + t_ab[2])
+
+
+@njit_inline
 def _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, px, py, pz):
     """res = [h, n, pa, pb] for a certified candidate: p (the other's frame) is A's
     witness when side is 0 (B's when 1), the other witness its translate by h along
     -n (+n)."""
     if side == 0:
-        ax = r_ab[0, 0] * px + r_ab[0, 1] * py + r_ab[0, 2] * pz + t_ab[0]
-        ay = r_ab[1, 0] * px + r_ab[1, 1] * py + r_ab[1, 2] * pz + t_ab[1]
-        az = r_ab[2, 0] * px + r_ab[2, 1] * py + r_ab[2, 2] * pz + t_ab[2]
+        ax, ay, az = _b_to_a_point(r_ab, t_ab, px, py, pz)
         bx, by, bz = ax - h * nx, ay - h * ny, az - h * nz
     else:
         bx, by, bz = px, py, pz
@@ -559,12 +565,8 @@ def _apart_out(res, gap, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy, qz):
     if not gap > 0.0:
         return 0.0
     if side == 0:
-        ax = r_ab[0, 0] * px + r_ab[0, 1] * py + r_ab[0, 2] * pz + t_ab[0]
-        ay = r_ab[1, 0] * px + r_ab[1, 1] * py + r_ab[1, 2] * pz + t_ab[1]
-        az = r_ab[2, 0] * px + r_ab[2, 1] * py + r_ab[2, 2] * pz + t_ab[2]
-        bx = r_ab[0, 0] * qx + r_ab[0, 1] * qy + r_ab[0, 2] * qz + t_ab[0]
-        by = r_ab[1, 0] * qx + r_ab[1, 1] * qy + r_ab[1, 2] * qz + t_ab[1]
-        bz = r_ab[2, 0] * qx + r_ab[2, 1] * qy + r_ab[2, 2] * qz + t_ab[2]
+        ax, ay, az = _b_to_a_point(r_ab, t_ab, px, py, pz)
+        bx, by, bz = _b_to_a_point(r_ab, t_ab, qx, qy, qz)
     else:
         ax, ay, az, bx, by, bz = qx, qy, qz, px, py, pz
     res[0] = -gap
@@ -670,10 +672,7 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     zlo, zhi, rmin = math.inf, -math.inf, math.inf
     ilo = ihi = inear = 0
     for i in range(nv):
-        p0, p1, p2 = pts[i, 0], pts[i, 1], pts[i, 2]
-        x = cx + p0 * ux + p1 * vx + p2 * kx
-        y = cy + p0 * uy + p1 * vy + p2 * ky
-        z = cz + p0 * uz + p1 * vz + p2 * kz
+        x, y, z = _hull_point(pts, i, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
         if z < zlo:
             zlo, ilo = z, i
         if z > zhi:

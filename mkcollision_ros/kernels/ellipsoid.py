@@ -284,7 +284,7 @@ def ellipsoid_exact(sa, sb, r_ab, t_ab, out):
         # origin in E: B contains A's centre; depth not measured
         gap = -1.0
         dir_c = _unit_or_z(c)
-        _write_back(ra, c, dir_c, gap, M_ELLIPSOID_EXACT, 0.0, out)
+        _write_back(ra, c, dir_c, gap, np.int64(M_ELLIPSOID_EXACT), 0.0, out)
         return _classify(gap, scale)
     x, steps = _point_ellipsoid(y, s)
     # back to the T frame: nearest point of E
@@ -293,7 +293,7 @@ def ellipsoid_exact(sa, sb, r_ab, t_ab, out):
         xt[i] = c[i] + u[i, 0] * x[0] + u[i, 1] * x[1] + u[i, 2] * x[2]
     dist = math.sqrt(xt[0] * xt[0] + xt[1] * xt[1] + xt[2] * xt[2])
     gap = dist - 1.0
-    _write_back(ra, xt, _unit_or_z(xt), gap, M_ELLIPSOID_EXACT, float(steps), out)
+    _write_back(ra, xt, _unit_or_z(xt), gap, np.int64(M_ELLIPSOID_EXACT), float(steps), out)
     return _classify(gap, scale)
 
 
@@ -322,7 +322,7 @@ def ellipsoid_sampled(sa, sb, r_ab, t_ab, n_subdiv, out):
     ui = _solve3(lmat, -c)
     if ui[0] * ui[0] + ui[1] * ui[1] + ui[2] * ui[2] <= 1.0:
         dir_c = _unit_or_z(c)
-        _write_back(ra, c, dir_c, -1.0, M_ELLIPSOID_SAMPLED, 0.0, out)
+        _write_back(ra, c, dir_c, -1.0, np.int64(M_ELLIPSOID_SAMPLED), 0.0, out)
         return _classify(-1.0, scale)
     k = 1 << n_subdiv
     best = np.inf
@@ -353,6 +353,6 @@ def ellipsoid_sampled(sa, sb, r_ab, t_ab, n_subdiv, out):
         if best <= 1.0:
             break   # contact found: stop at the end of this face
     gap = math.sqrt(best) - 1.0
-    _write_back(ra, best_p, _unit_or_z(best_p), gap, M_ELLIPSOID_SAMPLED,
+    _write_back(ra, best_p, _unit_or_z(best_p), gap, np.int64(M_ELLIPSOID_SAMPLED),
                 float(visited), out)
     return _classify(gap, scale)

@@ -1033,7 +1033,7 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, scale, ws, f):
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
     F = ws[2][_IF:_IF + EPA_MAX_FACES]
     d, wa, w = fs[_T3 + 8], fs[_T3 + 9], fs[_T3 + 11]
-    ns = 0
+    ns = np.int64(0)          # typed int64 at once (jit.py, "Literal")
     for q in range(3):
         i = F[f, q]
         if VD[i, 0] != 0.0 or VD[i, 1] != 0.0 or VD[i, 2] != 0.0:
@@ -1273,7 +1273,7 @@ def _hull_top3(pts, dx, dy, dz):
     """The three highest vertices of ``pts`` (n >= 3, 3) along d: indices i, j, m and
     heights p1 >= p2 >= p3."""
     p1 = p2 = p3 = -np.inf
-    i = j = m = 0
+    i = j = m = np.int64(0)   # typed int64 at once (jit.py, "Literal")
     for q in range(pts.shape[0]):
         v = pts[q, 0] * dx + pts[q, 1] * dy + pts[q, 2] * dz
         if v > p3:
@@ -1908,7 +1908,7 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, scale, ws, dx, dy, dz):
         # the face's outward normal is d on A, -d on B
         sg = 1.0 if side == 0 else -1.0
         cbest = 0.0
-        k = 0
+        k = np.int64(0)       # typed int64 at once (jit.py, "Literal")
         for axis in range(0 if code == BOX else 2, 3):
             kx, ky, kz = _axis_of(side, axis, r_ab)
             c = sg * (kx * dx + ky * dy + kz * dz)
@@ -2253,7 +2253,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
             p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
     while True:
         # face closest to the origin
-        best = -1
+        best = np.int64(-1)   # typed int64 at once (jit.py, "Literal")
         bd = np.inf
         for f in range(nf):
             if FD[f] < bd:          # dead and degenerate faces hold FD = inf
@@ -2591,6 +2591,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         out[OUT_METHOD] = M_GJK_EPA
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)
+    # distances up to this are exact; a pair proved farther apart stops there
+    band = max(cutoff, TOUCH_TOL * scale)
     fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
@@ -2602,7 +2604,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # a box and a cylinder whose cores overlap: the exact depth in closed form,
         # certified, without GJK or EPA (boxcyl); else (apart, touching, or not
         # certified) GJK and EPA as for any pair
-        return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+        return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     if sa[0] == CYLINDER or sb[0] == CYLINDER:
         # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl): cores
         # that overlap, one core's point as deep inside the cylinder as h along the
@@ -2620,11 +2622,11 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             d = ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res)
         elif other == CONVEX:
             d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
-        if d > 0.0 or (d < 0.0 and -d - ra - rb > max(cutoff, TOUCH_TOL * scale)):
-            return _core_out(out, res, ra, rb, pa, pb, 1, scale)
+        if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
+            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
-                              ra + rb + max(cutoff, TOUCH_TOL * scale),
+                              ra + rb + band,
                               _gjk_newton_pair(sa[0], sb[0])
                               or _has_crease(sa[0]) or _has_crease(sb[0]))
     iters = it

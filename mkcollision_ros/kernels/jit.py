@@ -39,6 +39,17 @@ ends; any compile in the process gets it (the node's warm-up, the first call of
 (BENCHMARKS.md, session 30): 382 s (with a pure-Python test run beside it) -> 265 s
 (nothing beside it), peak memory the same (1.7 GB); with the collector off altogether
 245 s but 5.4 GB; ``mpr_ws`` compiled alone, 40 -> 28 s with the collector off.
+
+"Literal": an integer constant passed to a compiled (not inlined) kernel is typed
+``Literal[int](c)``, and so is a loop variable before numba's type propagation has
+seen its later values (``k = 0`` ahead of ``k = axis`` in a loop).  numba then compiles
+the callee once for the literal and once more for int64, identical code, one wasted
+compile each.  Such a constant or first value is written ``np.int64(c)``, typed int64
+at once.  Session 31 found eight kernels compiled twice (``_set_out``, ``_face_test``,
+``_hull_face_test``, ``_crossing_test``, ``_epa_polish``, ``_newton_min_support``,
+``_blank``, ``_has_closed_form``) and ``ellipsoid._write_back`` compiled for two
+literals; ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
+them: a cached kernel never compiles the kernels it calls).
 """
 import gc
 import hashlib

@@ -98,7 +98,7 @@ def _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         return st
     if out[OUT_DIST] > max(cutoff, TOUCH_TOL * shape_scale(sa, sb)):
         return ST_SEPARATED
-    _blank(out, M_AUTO)
+    _blank(out, np.int64(M_AUTO))   # not a Literal-typed second compile (jit.py)
     return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws[2], cutoff)
 
 
@@ -323,8 +323,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     if method == M_AUTO or method == M_ANALYTIC:
         # the pairs solved in the world frame, by the kind of closed form
         half_space = (code_a == PLANE) != (code_b == PLANE)
-        sphere_a = code_a == SPHERE and _has_closed_form(SPHERE, code_b, prm_b)
-        sphere_b = code_b == SPHERE and _has_closed_form(SPHERE, code_a, prm_a)
+        sphere_a = code_a == SPHERE and _has_closed_form(np.int64(SPHERE), code_b, prm_b)
+        sphere_b = code_b == SPHERE and _has_closed_form(np.int64(SPHERE), code_a, prm_a)
         capsules = code_a == CAPSULE and code_b == CAPSULE
         if half_space or sphere_a or sphere_b or capsules:
             scale = shape_scale((code_a, prm_a, vr_a[0], vr_a[1]),

@@ -233,24 +233,23 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         w[0, 1] = 0.0
         w[0, 2] = 0.0
 
+    # v1 along -v0, then (phase 2, portal discovery) v2 along v1 x v0, from one support
+    # site: numba copies an inlined function's IR at every call site (jit.py, "First
+    # compile"), and the support is the largest part of mpr_ws
     dx, dy, dz = -w[0, 0], -w[0, 1], -w[0, 2]
-    if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, 1) <= 0.0:
-        return _write_separated(w, wa, 1, dx, dy, dz, out, 1.0)
-
-    # d = v1 x v0
-    dx = w[1, 1] * w[0, 2] - w[1, 2] * w[0, 1]
-    dy = w[1, 2] * w[0, 0] - w[1, 0] * w[0, 2]
-    dz = w[1, 0] * w[0, 1] - w[1, 1] * w[0, 0]
-    n1 = math.sqrt(w[1, 0] ** 2 + w[1, 1] ** 2 + w[1, 2] ** 2)
-    n0 = math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2)
-    if math.sqrt(dx * dx + dy * dy + dz * dz) <= 1e-14 * n1 * n0:
-        # origin on the segment v0-v1: the ray meets the boundary at v1, whose support
-        # plane has normal -v0 (exact supporting plane)
-        return _status(_write_support_plane(w, wa, out, 1.0), scale)
-
-    # ---- phase 2: portal discovery -----------------------------------------------------
-    if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, 2) <= 0.0:
-        return _write_separated(w, wa, 2, dx, dy, dz, out, 2.0)
+    for k in range(1, 3):
+        if k == 2:
+            dx = w[1, 1] * w[0, 2] - w[1, 2] * w[0, 1]
+            dy = w[1, 2] * w[0, 0] - w[1, 0] * w[0, 2]
+            dz = w[1, 0] * w[0, 1] - w[1, 1] * w[0, 0]
+            n1 = math.sqrt(w[1, 0] ** 2 + w[1, 1] ** 2 + w[1, 2] ** 2)
+            n0 = math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2)
+            if math.sqrt(dx * dx + dy * dy + dz * dz) <= 1e-14 * n1 * n0:
+                # origin on the segment v0-v1: the ray meets the boundary at v1, whose
+                # support plane has normal -v0 (exact supporting plane)
+                return _status(_write_support_plane(w, wa, out, 1.0), scale)
+        if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k) <= 0.0:
+            return _write_separated(w, wa, k, dx, dy, dz, out, float(k))
     nx, ny, nz = _cross_rows(w, 0, 1, 2)
     if nx * w[0, 0] + ny * w[0, 1] + nz * w[0, 2] > 0.0:
         _copy_row(w, wa, wb, 1, 4)

@@ -17,6 +17,9 @@ convex     ``points: [[x, y, z], ...]`` or ``mesh: f.obj``  the hull of the poin
 plane      ``normal: [nx, ny, nz]``, ``offset: d``         the half-space n.x <= d
 =========  ==============================================  ===========================
 
+A convex shape keeps only the points its hull needs: a point strictly inside the hull of
+the others is dropped when the shape is built (mkcollision_ros.hull; no support point
+changes, every pass over the points gets shorter).
 Any shape may add ``margin: m`` (>= 0): the shape grown by a sphere of radius m.
 Invalid input raises ``ValueError`` with a message naming the shape and the key.
 """
@@ -26,6 +29,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .hull import hull_points
 from .kernels.constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID,
                                 N_PARAMS, P_MARGIN, P_RADIUS, P_ROLL, PLANE, SHAPE_NAMES,
                                 SPHERE)
@@ -153,6 +157,7 @@ def shape_row(shape, base_dir=None):
                              f"got shape {verts.shape}")
         if not np.all(np.isfinite(verts)):
             raise ValueError("convex shape: points must be finite")
+        verts = hull_points(verts)
         radius = float(np.linalg.norm(verts, axis=1).max())
     else:  # PLANE
         n = _vector(shape, "normal", 3, positive=False)

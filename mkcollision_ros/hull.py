@@ -1,0 +1,258 @@
+"""Which points of a convex shape's point list are needed: the convex hull in numpy.
+
+A convex shape is the convex hull of its points, and every kernel that reads it walks
+all of them (the support function is a pass over the points, geometry.support_core_xyz;
+the contact polygon of manifold.py collects the points near a support plane).  A point
+strictly inside the hull never attains a support maximum, so dropping it changes no
+support point, and it makes every pass shorter: point clouds and non-convex meshes
+given as convex shapes carry many such points.  ``hull_keep`` finds them.
+
+How (quickhull, Barber, Dobkin & Huhdanpaa, ACM TOMS 22(4), 1996, with its conflict
+lists): an initial tetrahedron of extreme points, then, face by face, the point
+farthest above a face is added, the faces it sees are removed and its horizon is closed
+with new faces; the points above a removed face are handed to the new faces they lie
+above, or dropped when above none.
+
+Why it is safe whatever the round-off: a point is dropped only if it lies more than
+_MARGIN times the points' extent (``margin``) below the plane of every face of the
+computed surface Q, and only after Q is
+checked to be a closed, consistently oriented surface with the Euler characteristic of
+a sphere whose every face plane has the starting tetrahedron's centroid c strictly
+below it.  Such a surface is star-shaped about c (radial projection from c covers the
+sphere exactly once), so a point below every face plane lies inside Q, and Q, made of
+triangles on input points, lies inside their hull: the dropped point, with a ball of
+radius ``margin`` about it, is inside the hull, never a support point along any
+direction.  Any failed check (flat or needle point sets, whose tetrahedron is too
+thin; a horizon broken by round-off) keeps every point.  The kept points stay in their
+given order, so the kernels' first-maximum rule picks the same support point as with
+all points: every support is bit-identical, and so are GJK/EPA's distances, normals and
+witness points (tests/test_hull.py).  What moves is the shape's interior point, the
+mean of its points (geometry.centre_core): GJK's first direction, hence at times its
+step count, and MPR's portal origin, hence MPR's depth along its portal.
+"""
+import math
+
+import numpy as np
+
+# a face's "outside": farther above its plane than this (relative to the points' extent);
+# points within it of the hull's surface are kept, so nothing depends on its exact value
+_ABOVE = 1e-10
+# a point is dropped only when it lies deeper than this below every face plane
+_MARGIN = 1e-9
+# the starting tetrahedron must be at least this thick (else the set is flat or a needle)
+_THICK = 1e-7
+
+
+def _plane(P, a, b, c):
+    """Unit normal (3,) and offset of the plane through P[a], P[b], P[c]; a zero normal
+    and a NaN offset when degenerate (every test on it then fails).  Scalar arithmetic:
+    numpy's cross product of two 3-vectors costs ~20x more."""
+    ax, ay, az = P[a].tolist()
+    ux, uy, uz = (P[b] - P[a]).tolist()
+    vx, vy, vz = (P[c] - P[a]).tolist()
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    ln = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if not ln > 0.0:
+        return np.zeros(3), math.nan
+    nx, ny, nz = nx / ln, ny / ln, nz / ln
+    return np.array([nx, ny, nz]), nx * ax + ny * ay + nz * az
+
+
+def _tetrahedron(P, size):
+    """Four indices of a thick starting tetrahedron, or None when the points are flat or
+    collinear to _THICK * size."""
+    i0 = int(np.argmin(P[:, 0]))
+    i1 = int(np.argmax(np.linalg.norm(P - P[i0], axis=1)))
+    e = P[i1] - P[i0]
+    le = float(np.linalg.norm(e))
+    if not le > _THICK * size:
+        return None
+    e /= le
+    r = P - P[i0]
+    off = r - np.outer(r @ e, e)
+    i2 = int(np.argmax(np.linalg.norm(off, axis=1)))
+    if not float(np.linalg.norm(off[i2])) > _THICK * size:
+        return None
+    m = np.cross(e, P[i2] - P[i0])
+    m /= np.linalg.norm(m)
+    h = r @ m
+    i3 = int(np.argmax(np.abs(h)))
+    if not abs(float(h[i3])) > _THICK * size:
+        return None
+    return i0, i1, i2, i3
+
+
+def _closed_star_surface(faces, P, c, size):
+    """Whether the triangles ``faces`` (list of index triples, outward by winding) form a
+    closed oriented surface of Euler characteristic 2 with c strictly below every face
+    plane (the conditions of the module docstring)."""
+    directed = set()
+    for f in faces:
+        for k in range(3):
+            e = (f[k], f[(k + 1) % 3])
+            if e in directed:
+                return False
+            directed.add(e)
+    if any((b, a) not in directed for a, b in directed):
+        return False
+    nverts = len({v for f in faces for v in f})
+    if nverts - len(directed) // 2 + len(faces) != 2:
+        return False
+    for a, b, cc in faces:
+        n, d = _plane(P, a, b, cc)
+        if not float(n @ c) < d - _THICK * size:
+            return False
+    return True
+
+
+def hull_keep(points):
+    """Indices (ascending) of the points a convex shape keeps: all but those certainly
+    strictly inside the hull of the others (module docstring).  ``points``: (M, 3)
+    finite floats."""
+    P = np.asarray(points, dtype=np.float64)
+    n = len(P)
+    every = np.arange(n)
+    if n < 5:
+        return every
+    size = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+    tet = _tetrahedron(P, size) if size > 0.0 else None
+    if tet is None:
+        return every
+    above = _ABOVE * size
+    c = P[list(tet)].mean(axis=0)
+    # faces in growing arrays: corners wound outward, unit normal, offset, alive flag;
+    # the points above each live face (not yet on the hull) in ``conflict``
+    FA = np.zeros((64, 3), dtype=np.int64)
+    FN = np.zeros((64, 3))
+    FD = np.full(64, np.inf)
+    alive = np.zeros(64, dtype=bool)
+    conflict = {}
+    edge_face = {}      # directed edge (a, b) of a live face -> that face
+    nf = 0
+
+    def add_face(a, b, cc, orient):
+        nonlocal FA, FN, FD, alive, nf
+        nrm, d = _plane(P, a, b, cc)
+        if orient and float(nrm @ c) > d:     # only the starting faces may come inward
+            a, b = b, a
+            nrm, d = -nrm, -d
+        if nf == len(FD):
+            FA = np.concatenate([FA, np.zeros_like(FA)])
+            FN = np.concatenate([FN, np.zeros_like(FN)])
+            FD = np.concatenate([FD, np.full(len(FD), np.inf)])
+            alive = np.concatenate([alive, np.zeros(len(alive), dtype=bool)])
+        FA[nf] = a, b, cc
+        FN[nf] = nrm
+        FD[nf] = d
+        alive[nf] = True
+        conflict[nf] = None
+        for e in ((a, b), (b, cc), (cc, a)):
+            edge_face[e] = nf
+        nf += 1
+        return nf - 1
+
+    def assign(ids, pts):
+        """Hand each point to the face among ``ids`` it lies farthest above, if any."""
+        if len(pts) == 0:
+            return
+        S = P[pts] @ FN[ids].T - FD[ids]
+        best = np.argmax(S, axis=1)
+        out = S[np.arange(len(pts)), best] > above
+        for k, i in enumerate(ids):
+            sel = out & (best == k)
+            if sel.any():
+                conflict[i] = pts[sel]
+
+    i0, i1, i2, i3 = tet
+    start = [add_face(i0, i1, i2, True), add_face(i0, i3, i1, True),
+             add_face(i1, i3, i2, True), add_face(i0, i2, i3, True)]
+    assign(start, np.setdiff1d(every, np.array(tet)))
+    todo = list(start)
+    steps = 0
+    while todo:
+        f = todo.pop()
+        if not alive[f] or conflict[f] is None:
+            continue
+        steps += 1
+        if steps > n:                           # each step puts a point on the hull
+            return every
+        pts = conflict[f]
+        p = int(pts[np.argmax(P[pts] @ FN[f] - FD[f])])
+        # the faces p sees: a walk over edge neighbours from f (the seen region of a
+        # convex surface is connected); the edges to unseen faces form the horizon
+        seen = [f]
+        alive[f] = False
+        horizon = []
+        k = 0
+        while k < len(seen):
+            a, b, cc = FA[seen[k]].tolist()
+            k += 1
+            for e in ((a, b), (b, cc), (cc, a)):
+                g = edge_face.get((e[1], e[0]), -1)
+                if g < 0:
+                    return every                # not closed: round-off broke it
+                if alive[g] and FN[g] @ P[p] - FD[g] > above:
+                    alive[g] = False
+                    seen.append(g)
+                elif alive[g]:
+                    horizon.append(e)
+        for g in seen:
+            a, b, cc = FA[g].tolist()
+            for e in ((a, b), (b, cc), (cc, a)):
+                if edge_face.get(e) == g:
+                    del edge_face[e]
+        lists = [conflict[g] for g in seen if conflict[g] is not None]
+        orphans = np.unique(np.concatenate(lists)) if lists else np.zeros(0, np.int64)
+        orphans = orphans[orphans != p]
+        for g in seen:
+            del conflict[g]
+        new = [add_face(a, b, p, False) for a, b in horizon]
+        if not np.all(FN[new] @ c < FD[new]):   # round-off: the final check would fail
+            return every
+        assign(new, orphans)
+        todo.extend(new)
+    live = np.flatnonzero(alive[:nf])
+    if not _closed_star_surface(FA[live].tolist(), P, c, size):
+        return every
+    # the hull's vertices stay; every other point is tested against all face planes
+    # (in blocks: points times faces can be large)
+    keep = np.zeros(n, dtype=bool)
+    keep[np.unique(FA[live])] = True
+    rest = np.flatnonzero(~keep)
+    for k in range(0, len(rest), 1024):
+        idx = rest[k:k + 1024]
+        depth_below = (FD[live] - P[idx] @ FN[live].T).min(axis=1)
+        keep[idx] = ~(depth_below > _MARGIN * size)
+    return np.flatnonzero(keep)
+
+
+# point sets up to this size are kept whole (see hull_points)
+HULL_MIN_POINTS = 64
+_CACHE = {}
+_CACHE_SIZE = 256
+
+
+def hull_points(points):
+    """``points`` (M, 3) without those ``hull_keep`` drops, in their given order (a new
+    array; the input when none is dropped).
+
+    Only sets of more than HULL_MIN_POINTS points are pruned.  The hull costs ~0.15 ms
+    per hull vertex here (a Python loop: 1.4 ms for 25 points, 0.6 s for 4,000 on a
+    sphere), and a pass over 64 points costs the kernels tens of ns, so a small set would
+    need tens of thousands of support calls to repay it, and the tests, which build
+    hundreds of thousands of random 20-30 point hulls, would take minutes longer
+    (measured: 434 s of hull time in test_gjk_epa.py's 14 convex tests against coal).
+    The answer is kept for the last _CACHE_SIZE point sets, keyed by their bytes:
+    ``collide`` builds its two shapes again at every call, which a loop over poses
+    repeats with the same points."""
+    P = np.ascontiguousarray(points, dtype=np.float64)
+    if len(P) <= HULL_MIN_POINTS:
+        return P
+    key = (P.shape, P.tobytes())
+    keep = _CACHE.get(key)
+    if keep is None:
+        keep = hull_keep(P)
+        if len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[key] = keep
+    return P if len(keep) == len(P) else P[keep]

@@ -26,7 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import bench.common as common  # noqa: E402
 from bench.narrowphase import run_mujoco, run_ours  # noqa: E402
 from mkcollision_ros.kernels.constants import CONVEX, M_AUTO  # noqa: E402
-from mkcollision_ros.shapes import ShapeTable  # noqa: E402
+from mkcollision_ros.shapes import build_table  # noqa: E402
 
 ROWS = ("sphere-convex", "box-convex", "cylinder-convex", "ellipsoid-convex",
         "convex-convex")
@@ -44,19 +44,6 @@ def cloud(kind, points):
     return draw
 
 
-def whole_table(shapes, pruned):
-    """``pruned`` with every convex shape's points kept."""
-    verts, vrange, start = [], [], 0
-    for s in shapes:
-        v = np.asarray(s["points"]) if s["type"] == "convex" else np.zeros((0, 3))
-        verts.append(v)
-        vrange.append((start, len(v)))
-        start += len(v)
-    return ShapeTable(codes=pruned.codes, params=pruned.params,
-                      vrange=np.asarray(vrange, dtype=np.int64),
-                      verts=np.concatenate(verts))
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("rows", nargs="*", default=ROWS)
@@ -71,7 +58,7 @@ def main():
             a, b = row.split("-")
             shapes, table, pairs, pos, quat = common.pair_cases(
                 a, b, args.n, seed=1 + 101 * common.KINDS.index(a) + common.KINDS.index(b))
-            whole = whole_table(shapes, table)
+            whole = build_table(shapes, prune=False)
             t_p, st_p, _ = run_ours(table, pairs, pos, quat, M_AUTO, args.repeat, 0.0)
             t_w, st_w, _ = run_ours(whole, pairs, pos, quat, M_AUTO, args.repeat, 0.0)
             assert np.array_equal(st_p, st_w)

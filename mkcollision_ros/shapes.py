@@ -99,8 +99,10 @@ def load_obj_vertices(path):
     return np.asarray(pts, dtype=np.float64)
 
 
-def shape_row(shape, base_dir=None):
-    """Validate one shape dict; return (code, params float64[8], vertices (M, 3))."""
+def shape_row(shape, base_dir=None, prune=True):
+    """Validate one shape dict; return (code, params float64[8], vertices (M, 3)).
+    ``prune``: a convex shape drops the points strictly inside its hull
+    (mkcollision_ros.hull; False keeps every point, for comparisons)."""
     if not isinstance(shape, dict):
         raise ValueError(f"a shape must be a dict with a 'type', got {shape!r}")
     kind = shape.get("type")
@@ -157,7 +159,8 @@ def shape_row(shape, base_dir=None):
                              f"got shape {verts.shape}")
         if not np.all(np.isfinite(verts)):
             raise ValueError("convex shape: points must be finite")
-        verts = hull_points(verts)
+        if prune:
+            verts = hull_points(verts)
         radius = float(np.linalg.norm(verts, axis=1).max())
     else:  # PLANE
         n = _vector(shape, "normal", 3, positive=False)
@@ -172,12 +175,12 @@ def shape_row(shape, base_dir=None):
     return code, prm, verts
 
 
-def build_table(shapes, base_dir=None):
-    """Pack a list of shape dicts into a ``ShapeTable``."""
+def build_table(shapes, base_dir=None, prune=True):
+    """Pack a list of shape dicts into a ``ShapeTable`` (``prune``: as ``shape_row``)."""
     codes, params, vrange, chunks = [], [], [], []
     start = 0
     for shape in shapes:
-        code, prm, verts = shape_row(shape, base_dir)
+        code, prm, verts = shape_row(shape, base_dir, prune)
         codes.append(code)
         params.append(prm)
         vrange.append((start, len(verts)))

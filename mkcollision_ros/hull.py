@@ -228,13 +228,56 @@ def hull_keep(points):
 
 # point sets up to this size are kept whole (see hull_points)
 HULL_MIN_POINTS = 64
+# hulls of more points than this are stored in groups (see support_groups)
+GROUP_MIN_POINTS = 128
+GROUP_SIZE = 16
 _CACHE = {}
 _CACHE_SIZE = 256
 
 
+def _leaves(P, idx):
+    """``idx`` split at the median of the longest extent, again and again, into runs of
+    at most GROUP_SIZE points: the runs, each compact in space."""
+    if len(idx) <= GROUP_SIZE:
+        return [idx]
+    Q = P[idx]
+    axis = int(np.argmax(Q.max(axis=0) - Q.min(axis=0)))
+    order = idx[np.argsort(Q[:, axis], kind="stable")]
+    half = len(order) // 2
+    return _leaves(P, order[:half]) + _leaves(P, order[half:])
+
+
+def support_groups(points):
+    """(points, rows): a large hull's points reordered into runs of at most GROUP_SIZE
+    points close together, and two rows per run for the kernels (geometry's
+    ``_grouped_support``): its bounding ball's centre (x, y, z), then (radius, first
+    point, point count).  Sets of GROUP_MIN_POINTS points or fewer: the points as given
+    and no rows.
+
+    Why: the support along d is at most c . d + r |d| over a run's ball, so a pass over
+    the balls finds the run that holds the maximum and skips every run whose bound is
+    below it: ~2 bounds per run and a few runs read, where a pass reads every point
+    (bench/big_hulls.py).  MuJoCo climbs its hull's vertex graph from its last support
+    vertex instead, which needs state per pair that our support has not got."""
+    P = np.ascontiguousarray(points, dtype=np.float64)
+    if len(P) <= GROUP_MIN_POINTS:
+        return P, np.zeros((0, 3))
+    runs = _leaves(P, np.arange(len(P)))
+    rows = np.zeros((2 * len(runs), 3))
+    start = 0
+    for g, run in enumerate(runs):
+        Q = P[run]
+        centre = 0.5 * (Q.max(axis=0) + Q.min(axis=0))
+        rows[2 * g] = centre
+        rows[2 * g + 1] = np.linalg.norm(Q - centre, axis=1).max(), start, len(run)
+        start += len(run)
+    return P[np.concatenate(runs)], rows
+
+
 def hull_points(points):
-    """``points`` (M, 3) without those ``hull_keep`` drops, in their given order (a new
-    array; the input when none is dropped).
+    """(points, rows): ``points`` (M, 3) without those ``hull_keep`` drops, in their
+    given order, then in ``support_groups``' order with its rows when more than
+    GROUP_MIN_POINTS are left (else no rows, a (0, 3) array).
 
     Only sets of more than HULL_MIN_POINTS points are pruned.  The hull costs ~0.15 ms
     per hull vertex here (a Python loop: 1.4 ms for 25 points, 0.6 s for 4,000 on a
@@ -247,12 +290,13 @@ def hull_points(points):
     repeats with the same points."""
     P = np.ascontiguousarray(points, dtype=np.float64)
     if len(P) <= HULL_MIN_POINTS:
-        return P
+        return P, np.zeros((0, 3))
     key = (P.shape, P.tobytes())
-    keep = _CACHE.get(key)
-    if keep is None:
+    hit = _CACHE.get(key)
+    if hit is None:
         keep = hull_keep(P)
+        hit = support_groups(P if len(keep) == len(P) else P[keep])
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = keep
-    return P if len(keep) == len(P) else P[keep]
+        _CACHE[key] = hit
+    return hit

@@ -19,7 +19,7 @@ import numpy as np
 from .kernels.constants import METHOD_NAMES, OUT_SIZE
 from .kernels.narrowphase import collide_batch, collide_world
 from .results import CollisionResult
-from .shapes import shape_row, validate_pose
+from .shapes import point_count, shape_row, validate_pose
 
 _METHODS = {name: code for code, name in enumerate(METHOD_NAMES)}
 
@@ -33,7 +33,8 @@ def _method_code(method):
 
 def _pack(shape, base):
     code, prm, verts = shape_row(shape)
-    return np.int64(code), prm, np.array([base, len(verts)], dtype=np.int64), verts
+    count = point_count(code, prm, verts)
+    return np.int64(code), prm, np.array([base, count], dtype=np.int64), verts
 
 
 def collide(shape_a, pose_a, shape_b, pose_b, method="auto"):

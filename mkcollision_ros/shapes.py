@@ -19,7 +19,8 @@ plane      ``normal: [nx, ny, nz]``, ``offset: d``         the half-space n.x <=
 
 A convex shape keeps only the points its hull needs: a point strictly inside the hull of
 the others is dropped when the shape is built (mkcollision_ros.hull; no support point
-changes, every pass over the points gets shorter).
+changes, every pass over the points gets shorter), and a hull of many points is stored in
+groups of nearby points whose bounding balls let the support skip most of them.
 Any shape may add ``margin: m`` (>= 0): the shape grown by a sphere of radius m.
 Invalid input raises ``ValueError`` with a message naming the shape and the key.
 """
@@ -31,8 +32,8 @@ import numpy as np
 
 from .hull import hull_points
 from .kernels.constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID,
-                                N_PARAMS, P_MARGIN, P_RADIUS, P_ROLL, PLANE, SHAPE_NAMES,
-                                SPHERE)
+                                N_PARAMS, P_GROUPS, P_MARGIN, P_RADIUS, P_ROLL, PLANE,
+                                SHAPE_NAMES, SPHERE)
 
 SHAPE_CODES = {name: code for code, name in enumerate(SHAPE_NAMES)}
 _KEYS = {
@@ -49,7 +50,9 @@ class ShapeTable(NamedTuple):
     codes  int64 (N,)      shape-type code (constants.SPHERE ...)
     params float64 (N, 8)  parameter rows, layout in kernels/geometry.py
     vrange int64 (N, 2)    (first vertex, vertex count) in ``verts`` for convex shapes
-    verts  float64 (M, 3)  convex hull vertices, body frame, metres
+    verts  float64 (M, 3)  convex hull vertices, body frame, metres; a hull stored in
+                           groups (params[i, P_GROUPS] > 0) has two rows per group right
+                           after its vertices (mkcollision_ros.hull.support_groups)
     """
     codes: np.ndarray
     params: np.ndarray
@@ -160,7 +163,8 @@ def shape_row(shape, base_dir=None, prune=True):
         if not np.all(np.isfinite(verts)):
             raise ValueError("convex shape: points must be finite")
         if prune:
-            verts = hull_points(verts)
+            verts, groups = hull_points(verts)
+            prm[P_GROUPS] = len(groups) // 2
         radius = float(np.linalg.norm(verts, axis=1).max())
     else:  # PLANE
         n = _vector(shape, "normal", 3, positive=False)
@@ -172,7 +176,15 @@ def shape_row(shape, base_dir=None, prune=True):
         radius = 0.0
     prm[P_MARGIN] = margin
     prm[P_RADIUS] = radius + margin if code != PLANE else 0.0
+    if code == CONVEX and prm[P_GROUPS] > 0:
+        verts = np.concatenate([verts, groups])
     return code, prm, verts
+
+
+def point_count(code, prm, verts):
+    """How many of ``shape_row``'s rows ``verts`` are the shape's points (the rest, a
+    large hull's group rows, mkcollision_ros.hull.support_groups)."""
+    return len(verts) - (2 * int(prm[P_GROUPS]) if code == CONVEX else 0)
 
 
 def build_table(shapes, base_dir=None, prune=True):
@@ -183,7 +195,7 @@ def build_table(shapes, base_dir=None, prune=True):
         code, prm, verts = shape_row(shape, base_dir, prune)
         codes.append(code)
         params.append(prm)
-        vrange.append((start, len(verts)))
+        vrange.append((start, point_count(code, prm, verts)))
         chunks.append(verts)
         start += len(verts)
     return ShapeTable(

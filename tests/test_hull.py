@@ -6,10 +6,12 @@ import itertools
 import numpy as np
 import pytest
 
-from mkcollision_ros.hull import HULL_MIN_POINTS, hull_keep, hull_points
+from mkcollision_ros.hull import (GROUP_MIN_POINTS, GROUP_SIZE, HULL_MIN_POINTS, hull_keep,
+                                  hull_points, support_groups)
 from mkcollision_ros.kernels import constants as C
+from mkcollision_ros.kernels.geometry import support_core_xyz
 from mkcollision_ros.kernels.narrowphase import collide_batch
-from mkcollision_ros.shapes import build_table, shape_row
+from mkcollision_ros.shapes import build_table, point_count, shape_row
 
 
 def brute_planes(P):
@@ -111,16 +113,17 @@ def test_degenerate_sets_are_kept_whole_or_pruned_safely(name):
 def test_small_sets_are_not_pruned_and_large_ones_are():
     rng = np.random.default_rng(7)
     blob = rng.normal(size=(HULL_MIN_POINTS, 3))
-    assert len(hull_points(blob)) == HULL_MIN_POINTS
+    assert len(hull_points(blob)[0]) == HULL_MIN_POINTS and not len(hull_points(blob)[1])
     big = rng.normal(size=(500, 3))
     code, prm, verts = shape_row({"type": "convex", "points": big.tolist()})
     assert len(verts) < 100                          # a Gaussian blob's hull: ~50 of 500
+    assert prm[C.P_GROUPS] == 0                      # too few for groups
     # the same bounding radius (the farthest point is a vertex) and the given order
     assert prm[C.P_RADIUS] == pytest.approx(np.linalg.norm(big, axis=1).max(), rel=1e-15)
     idx = [int(np.flatnonzero((big == v).all(1))[0]) for v in verts]
     assert idx == sorted(idx)
     # the cache answers a repeated set with the same points
-    assert np.array_equal(hull_points(big), verts)
+    assert np.array_equal(hull_points(big)[0], verts)
 
 
 def test_kernels_give_identical_results_with_the_pruned_points():
@@ -178,3 +181,90 @@ def test_kernels_give_identical_results_with_the_pruned_points():
         if method != C.M_MPR:
             cols = np.arange(C.OUT_SIZE) != C.OUT_ITERS
             assert np.array_equal(o1[:, cols], o2[:, cols])
+
+
+def test_groups_cover_every_point_once_in_compact_runs():
+    rng = np.random.default_rng(19)
+    d = rng.normal(size=(700, 3))
+    P = d / np.linalg.norm(d, axis=1, keepdims=True)
+    Q, rows = support_groups(P)
+    ng = len(rows) // 2
+    assert ng >= 700 // GROUP_SIZE
+    starts, counts = rows[1::2, 1].astype(int), rows[1::2, 2].astype(int)
+    assert np.array_equal(starts, np.concatenate([[0], np.cumsum(counts)[:-1]]))
+    assert counts.sum() == 700 and counts.max() <= GROUP_SIZE
+    # the same points, each once
+    assert np.array_equal(np.sort(Q.view("f8,f8,f8").ravel()), np.sort(P.view("f8,f8,f8").ravel()))
+    # every run inside its ball, and the balls small beside the set (compact runs)
+    for g in range(ng):
+        run = Q[starts[g]:starts[g] + counts[g]]
+        assert np.linalg.norm(run - rows[2 * g], axis=1).max() <= rows[2 * g + 1, 0]
+    assert rows[1::2, 0].max() < 0.5
+    # small sets: as given, no rows
+    assert len(support_groups(P[:GROUP_MIN_POINTS])[1]) == 0
+
+
+def test_grouped_support_is_the_pass_maximum():
+    """The compiled support of hulls stored in groups against a pass over the same
+    points (groups switched off), along random directions and the axes (ties)."""
+    rng = np.random.default_rng(23)
+    d = rng.normal(size=(900, 3))
+    sets = [d / np.linalg.norm(d, axis=1, keepdims=True) * [0.5, 0.2, 0.3],
+            rng.normal(size=(20000, 3)) * [1.0, 0.3, 2.0],
+            d[:400] / np.linalg.norm(d[:400], axis=1, keepdims=True) * 1e-3 + 1e4]
+    U = np.concatenate([rng.normal(size=(3000, 3)), np.eye(3), -np.eye(3),
+                        [[1.0, 1.0, 0.0], [0.0, -1.0, 1.0]]])
+    for P in sets:
+        code, prm, rows = shape_row({"type": "convex", "points": P.tolist()})
+        vn = point_count(code, prm, rows)
+        if len(P) != 20000:                    # (a blob's ~50 hull points: no groups)
+            assert prm[C.P_GROUPS] > 0
+        passing = prm.copy()
+        passing[C.P_GROUPS] = 0.0
+        for u in U:
+            a = support_core_xyz(code, prm, rows, 0, vn, u[0], u[1], u[2])
+            b = support_core_xyz(code, passing, rows, 0, vn, u[0], u[1], u[2])
+            va = a[0] * u[0] + a[1] * u[1] + a[2] * u[2]
+            vb = b[0] * u[0] + b[1] * u[1] + b[2] * u[2]
+            assert va == vb
+            assert np.any(np.all(rows[:vn] == a, axis=1))
+
+
+def test_kernels_agree_on_hulls_stored_in_groups():
+    """Shells (every point a hull vertex, stored in groups) against the same points
+    kept whole and passed over: the same statuses, distances within EPA's tolerance
+    (another of tied support points may end EPA elsewhere in its band)."""
+    rng = np.random.default_rng(29)
+    others = [{"type": "sphere", "radius": 0.3}, {"type": "box", "size": [0.5, 0.3, 0.4]},
+              {"type": "cylinder", "radius": 0.25, "height": 0.6},
+              {"type": "ellipsoid", "radii": [0.4, 0.2, 0.3]}]
+    shapes = []
+    for _ in range(3):
+        d = rng.normal(size=(300, 3))
+        shell = (0.4 * d / np.linalg.norm(d, axis=1, keepdims=True)).tolist()
+        for o in others + [{"type": "convex", "points": shell}]:
+            shapes += [{"type": "convex", "points": shell}, o]
+    grouped = build_table(shapes)
+    assert np.all(grouped.params[grouped.codes == C.CONVEX, C.P_GROUPS] > 0)
+    whole = build_table(shapes, prune=False)
+    n = len(shapes) // 2
+    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
+    scale = grouped.params[0::2, C.P_RADIUS] + grouped.params[1::2, C.P_RADIUS]
+    prng = np.random.default_rng(3)
+    hits = 0
+    for _ in range(40):
+        pos = prng.normal(size=(2 * n, 3)) * 0.35
+        q = prng.normal(size=(2 * n, 4))
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        res = []
+        for t in (grouped, whole):
+            out = np.zeros((n, C.OUT_SIZE))
+            st = np.zeros(n, dtype=np.int64)
+            collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, q,
+                          np.int64(C.M_GJK_EPA), np.inf, out, st)
+            res.append((out, st))
+        (o1, s1), (o2, s2) = res
+        assert np.array_equal(s1, s2)
+        assert np.all(np.abs(o1[:, C.OUT_DIST] - o2[:, C.OUT_DIST]) <= C.EPA_REL_TOL * scale)
+        hits += int(((s1 == C.ST_PENETRATING) | (s1 == C.ST_TOUCHING)).sum())
+    assert 0 < hits < 40 * n

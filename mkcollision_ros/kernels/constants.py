@@ -19,6 +19,8 @@ SHAPE_NAMES = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "con
 
 # --- layout of one row of the shape parameter table (float64[N_PARAMS]) ----------------
 N_PARAMS = 8
+P_GROUPS = 0     # convex: groups of its points, two rows each right after them in verts
+                 # (0: none; mkcollision_ros.hull.support_groups, geometry._grouped_support)
 P_ROLL = 3       # ellipsoid: radius of a ball that rolls freely inside it (m), see
                  # geometry.py (0 is always valid: the core is then the ellipsoid)
 P_MARGIN = 6     # padding radius added around the shape (m)

@@ -20,7 +20,9 @@ Shape parameter row (float64[8], see constants.N_PARAMS):
   sphere    [r]                     ellipsoid [a, b, c, roll] (semi-axes, r above)
   box       [hx, hy, hz] (half)     capsule   [r, half_length]       (segment along z)
   cylinder  [r, half_height]        cone      [r, half_height]       (tip at +z, centred)
-  convex    []  (vertices in ``verts[v0:v0+vn]``, body frame)
+  convex    [groups] (vertices in ``verts[v0:v0+vn]``, body frame; a hull of more than
+            hull.GROUP_MIN_POINTS points has two rows per group of them right after,
+            see _grouped_support)
   plane     [nx, ny, nz, d] (unit n; half-space n.x <= d)
   [6] margin, [7] bounding radius about the origin with margin (plane: 0, unbounded).
 """
@@ -28,8 +30,8 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_MARGIN,
-                        P_ROLL, PLANE, SPHERE)
+from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_GROUPS,
+                        P_MARGIN, P_RADIUS, P_ROLL, PLANE, SPHERE)
 from .jit import borrow, njit_inline, njit_kernel
 
 
@@ -155,6 +157,8 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
             return 0.0, 0.0, h
         return bx, by, -h
     elif code == CONVEX:
+        if prm[P_GROUPS] > 0.0:
+            return _grouped_support(prm, verts, v0, vn, dx, dy, dz)
         # over a view from 0, not range(v0, v0 + vn): LLVM then knows the index is not
         # negative and drops numba's wraparound of signed indices in this hot loop
         pts = verts[v0:v0 + vn]
@@ -168,6 +172,50 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
         return pts[k, 0], pts[k, 1], pts[k, 2]
     # PLANE has no support point; callers route planes to the half-space path
     return 0.0, 0.0, 0.0
+
+
+@njit_kernel
+def _grouped_support(prm, verts, v0, vn, dx, dy, dz):
+    """support_core_xyz of a convex hull stored in groups (hull.support_groups: runs of
+    nearby points, and after the points two rows per run, its bounding ball's centre c
+    and (radius r, first point, count)).  No point of a run lies farther along d than
+    c . d + r |d|: the run of the highest bound is read first, then every other run
+    whose bound reaches the best value so far (less a slack of 1e-12 of the shape's
+    radius for the bound's round-off), so the value found is the maximum over all
+    points; where points tie, the first found of them.  A called kernel, not inlined:
+    the support is inlined at every site of GJK, EPA and MPR, and this is for large
+    hulls only."""
+    pts = verts[v0:v0 + vn]
+    grp = verts[v0 + vn:]
+    ng = int(prm[P_GROUPS])
+    dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+    top = 0
+    top_bound = -np.inf
+    for g in range(ng):
+        b = (grp[2 * g, 0] * dx + grp[2 * g, 1] * dy + grp[2 * g, 2] * dz
+             + grp[2 * g + 1, 0] * dn)
+        if b > top_bound:
+            top_bound = b
+            top = g
+    best = -np.inf
+    k = 0
+    slack = 1e-12 * prm[P_RADIUS] * dn
+    for q in range(-1, ng):
+        g = top if q < 0 else q
+        if q >= 0:
+            if g == top:
+                continue
+            b = (grp[2 * g, 0] * dx + grp[2 * g, 1] * dy + grp[2 * g, 2] * dz
+                 + grp[2 * g + 1, 0] * dn)
+            if b + slack < best:
+                continue
+        lo = int(grp[2 * g + 1, 1])
+        for i in range(lo, lo + int(grp[2 * g + 1, 2])):
+            v = pts[i, 0] * dx + pts[i, 1] * dy + pts[i, 2] * dz
+            if v > best:
+                best = v
+                k = i
+    return pts[k, 0], pts[k, 1], pts[k, 2]
 
 
 @njit_inline

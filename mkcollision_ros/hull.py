@@ -29,6 +29,10 @@ all points: every support is bit-identical, and so are GJK/EPA's distances, norm
 witness points (tests/test_hull.py).  What moves is the shape's interior point, the
 mean of its points (geometry.centre_core): GJK's first direction, hence at times its
 step count, and MPR's portal origin, hence MPR's depth along its portal.
+
+More than GROUP_MIN_POINTS kept points are then reordered into groups
+(``support_groups``): the support value stays the maximum, and where points tie the
+first found of them is taken, which may be another of them.
 """
 import math
 

@@ -86,10 +86,11 @@ def _tetrahedron(P, size):
     return i0, i1, i2, i3
 
 
-def _closed_star_surface(faces, P, c, size):
+def _closed_star_surface(faces, normals, offsets, c, size):
     """Whether the triangles ``faces`` (list of index triples, outward by winding) form a
     closed oriented surface of Euler characteristic 2 with c strictly below every face
-    plane (the conditions of the module docstring)."""
+    plane (the conditions of the module docstring); ``normals`` (K, 3) and ``offsets``
+    (K,) are the planes the caller keeps (and drops points by)."""
     directed = set()
     for f in faces:
         for k in range(3):
@@ -102,11 +103,7 @@ def _closed_star_surface(faces, P, c, size):
     nverts = len({v for f in faces for v in f})
     if nverts - len(directed) // 2 + len(faces) != 2:
         return False
-    for a, b, cc in faces:
-        n, d = _plane(P, a, b, cc)
-        if not float(n @ c) < d - _THICK * size:
-            return False
-    return True
+    return bool(np.all(normals @ c < offsets - _THICK * size))
 
 
 def hull_keep(points):
@@ -216,7 +213,7 @@ def hull_keep(points):
         assign(new, orphans)
         todo.extend(new)
     live = np.flatnonzero(alive[:nf])
-    if not _closed_star_surface(FA[live].tolist(), P, c, size):
+    if not _closed_star_surface(FA[live].tolist(), FN[live], FD[live], c, size):
         return every
     # the hull's vertices stay; every other point is tested against all face planes
     # (in blocks: points times faces can be large)

@@ -126,6 +126,42 @@ def test_small_sets_are_not_pruned_and_large_ones_are():
     assert np.array_equal(hull_points(big)[0], verts)
 
 
+OTHERS = [{"type": "sphere", "radius": 0.3}, {"type": "box", "size": [0.5, 0.3, 0.4]},
+          {"type": "cylinder", "radius": 0.25, "height": 0.6},
+          {"type": "ellipsoid", "radii": [0.4, 0.2, 0.3]},
+          {"type": "capsule", "radius": 0.15, "length": 0.4}]
+
+
+def paired(clouds_, others):
+    """Each cloud as a convex shape against each of ``others`` and against the first
+    cloud: shapes (2k, 2k + 1) are pair k."""
+    shapes = []
+    for P in clouds_:
+        for o in others + [{"type": "convex", "points": clouds_[0].tolist()}]:
+            shapes += [{"type": "convex", "points": P.tolist()}, o]
+    return shapes
+
+
+def run_rounds(table, method, reps=40):
+    """Statuses and outputs of ``reps`` rounds of seeded random poses over the table's
+    pairs (2k, 2k + 1), the rounds stacked."""
+    n = len(table.codes) // 2
+    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
+    prng = np.random.default_rng(3)
+    outs, sts = [], []
+    for _ in range(reps):
+        pos = prng.normal(size=(2 * n, 3)) * 0.35
+        q = prng.normal(size=(2 * n, 4))
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        out = np.zeros((n, C.OUT_SIZE))
+        st = np.zeros(n, dtype=np.int64)
+        collide_batch(table.codes, table.params, table.vrange, table.verts, pairs, pos, q,
+                      np.int64(method), np.inf, out, st)
+        outs.append(out)
+        sts.append(st)
+    return np.concatenate(outs), np.concatenate(sts)
+
+
 def test_kernels_give_identical_results_with_the_pruned_points():
     """The whole point set against its pruned copy, through the batched kernel: GJK/EPA
     (and auto) give the same statuses, distances, normals and witness points bit for
@@ -137,43 +173,16 @@ def test_kernels_give_identical_results_with_the_pruned_points():
     interior points go; MPR's depth along its portal depends on that point (one of
     its documented errors against EPA)."""
     rng = np.random.default_rng(11)
-    others = [{"type": "sphere", "radius": 0.3}, {"type": "box", "size": [0.5, 0.3, 0.4]},
-              {"type": "cylinder", "radius": 0.25, "height": 0.6},
-              {"type": "ellipsoid", "radii": [0.4, 0.2, 0.3]},
-              {"type": "capsule", "radius": 0.15, "length": 0.4}]
     clouds_ = [rng.normal(size=(300, 3)) * [0.3, 0.5, 0.4] for _ in range(4)]
     clouds_ += [rng.uniform(-0.4, 0.4, size=(200, 3)) for _ in range(2)]
-    shapes = []
-    for P in clouds_:
-        for o in others + [{"type": "convex", "points": clouds_[0].tolist()}]:
-            shapes += [{"type": "convex", "points": P.tolist()}, o]
+    shapes = paired(clouds_, OTHERS)
     pruned = build_table(shapes)
     whole = build_table(shapes, prune=False)
     assert np.array_equal(pruned.params, whole.params)
     assert len(pruned.verts) < len(whole.verts)
-    n = len(shapes) // 2
-    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
-    reps = 40
-    pos = np.zeros((2 * n, 3))
-    quat = np.zeros((2 * n, 4))
-    quat[:, 3] = 1.0
-    results = {}
     for method in (C.M_AUTO, C.M_GJK_EPA, C.M_MPR):
-        for name, t in (("pruned", pruned), ("whole", whole)):
-            outs, sts = [], []
-            prng = np.random.default_rng(3)
-            for _ in range(reps):
-                p = prng.normal(size=(2 * n, 3)) * 0.35
-                q = prng.normal(size=(2 * n, 4))
-                q /= np.linalg.norm(q, axis=1, keepdims=True)
-                pos[:], quat[:] = p, q
-                out = np.zeros((n, C.OUT_SIZE))
-                st = np.zeros(n, dtype=np.int64)
-                collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat,
-                              np.int64(method), np.inf, out, st)
-                outs.append(out)
-                sts.append(st)
-            results[name] = (np.concatenate(outs), np.concatenate(sts))
+        results = {name: run_rounds(t, method) for name, t in (("pruned", pruned),
+                                                               ("whole", whole))}
         (o1, s1), (o2, s2) = results["pruned"], results["whole"]
         hit = (s1 == C.ST_PENETRATING) | (s1 == C.ST_TOUCHING)
         assert 0 < hit.sum() < len(hit)              # both regimes are exercised
@@ -235,36 +244,21 @@ def test_kernels_agree_on_hulls_stored_in_groups():
     kept whole and passed over: the same statuses, distances within EPA's tolerance
     (another of tied support points may end EPA elsewhere in its band)."""
     rng = np.random.default_rng(29)
-    others = [{"type": "sphere", "radius": 0.3}, {"type": "box", "size": [0.5, 0.3, 0.4]},
-              {"type": "cylinder", "radius": 0.25, "height": 0.6},
-              {"type": "ellipsoid", "radii": [0.4, 0.2, 0.3]}]
-    shapes = []
+    shells = []
     for _ in range(3):
         d = rng.normal(size=(300, 3))
-        shell = (0.4 * d / np.linalg.norm(d, axis=1, keepdims=True)).tolist()
-        for o in others + [{"type": "convex", "points": shell}]:
-            shapes += [{"type": "convex", "points": shell}, o]
+        shells.append(0.4 * d / np.linalg.norm(d, axis=1, keepdims=True))
+    shapes = []
+    for shell in shells:
+        shapes += paired([shell], OTHERS[:4])
     grouped = build_table(shapes)
     assert np.all(grouped.params[grouped.codes == C.CONVEX, C.P_GROUPS] > 0)
     whole = build_table(shapes, prune=False)
-    n = len(shapes) // 2
-    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
-    scale = grouped.params[0::2, C.P_RADIUS] + grouped.params[1::2, C.P_RADIUS]
-    prng = np.random.default_rng(3)
-    hits = 0
-    for _ in range(40):
-        pos = prng.normal(size=(2 * n, 3)) * 0.35
-        q = prng.normal(size=(2 * n, 4))
-        q /= np.linalg.norm(q, axis=1, keepdims=True)
-        res = []
-        for t in (grouped, whole):
-            out = np.zeros((n, C.OUT_SIZE))
-            st = np.zeros(n, dtype=np.int64)
-            collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, q,
-                          np.int64(C.M_GJK_EPA), np.inf, out, st)
-            res.append((out, st))
-        (o1, s1), (o2, s2) = res
-        assert np.array_equal(s1, s2)
-        assert np.all(np.abs(o1[:, C.OUT_DIST] - o2[:, C.OUT_DIST]) <= C.EPA_REL_TOL * scale)
-        hits += int(((s1 == C.ST_PENETRATING) | (s1 == C.ST_TOUCHING)).sum())
-    assert 0 < hits < 40 * n
+    reps = 40
+    scale = np.tile(grouped.params[0::2, C.P_RADIUS] + grouped.params[1::2, C.P_RADIUS], reps)
+    o1, s1 = run_rounds(grouped, C.M_GJK_EPA, reps)
+    o2, s2 = run_rounds(whole, C.M_GJK_EPA, reps)
+    assert np.array_equal(s1, s2)
+    assert np.all(np.abs(o1[:, C.OUT_DIST] - o2[:, C.OUT_DIST]) <= C.EPA_REL_TOL * scale)
+    hits = int(((s1 == C.ST_PENETRATING) | (s1 == C.ST_TOUCHING)).sum())
+    assert 0 < hits < len(s1)

@@ -1335,17 +1335,19 @@ def test_cylinder_pair_ball_certified_depth_is_global():
     # under the other's cap, whose ball inside the other is as deep as h_{A-B} along
     # the other's normal there, certifies that h as the depth (within EPA_REL_TOL *
     # scale; it reports that h itself); so does the crossing of the two sides, h along
-    # the normal to both axes against a witness's ball.  Checked on random pairs as
-    # _check_certified_shortcut says.  At least 10% of the penetrating pairs are
-    # certified (measured here 160 of 750, 21%: these overlaps are deep, up to the
-    # centres' coinciding; bench/deep_pairs.py's cases: 41%), at least 20 of them by the
-    # crossing (measured here: 44), whose normal is square to both axes.
+    # the normal to both axes against a witness's ball or, near a cylinder's end,
+    # against cylcyl._crossing_global's bound.  Checked on random pairs as
+    # _check_certified_shortcut says.  At least 20% of the penetrating pairs are
+    # certified (measured here 287 of 750, 38%: these overlaps are deep, up to the
+    # centres' coinciding; 160 before _crossing_global), at least 100 of them by the
+    # crossing (measured here: 171; 44 with the witnesses' balls alone), whose normal is
+    # square to both axes.
     certified, pen, found = _check_certified_shortcut(31, ("cylinder", "cylinder"), 60,
                                                       0.0)
     assert pen >= 250
-    assert certified >= 0.1 * pen
+    assert certified >= 0.2 * pen
     crossing = sum(abs(n[2]) < 1e-12 and abs(n @ r_ab[:, 2]) < 1e-12 for n, r_ab in found)
-    assert crossing >= 20
+    assert crossing >= 100
 
 
 def test_crossing_global_certificate_holds_on_every_direction():

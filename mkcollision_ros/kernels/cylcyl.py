@@ -30,7 +30,9 @@ direction is theirs:
      other's support is the whole cap, so h = H -+ p_z exactly, with no support of A - B.
   3. The two sides crossing (sides_crossing): n normal to both axes, where both
      supports are side segments, so h(n) needs no support of A - B either, and p a
-     witness on one side at the foot of the origin, h in from the other's side.
+     witness on one side at the foot of the origin, h in from the other's side.  Near
+     a cylinder's end, where neither witness's ball is whole, _crossing_global bounds
+     h over every direction instead (no ball: the concavity of h in the axes' plane).
 Two sides (A in B, B in A) give eight candidates of kinds 1 and 2.  A cap candidate
 with h <= 0 proves the cores apart (the cylinder lies past the other's cap plane), and
 so does the crossing with h <= 0 (the plane between the two side segments): minus that
@@ -51,10 +53,14 @@ per pair over all 2,000 (a loop calling it alone, less the loop's own ~27 ns), a
 ~3.4 us of GJK + EPA saved on each certified pair.  The crossing (session 29, the same
 run against GJK + EPA at 7cbaae1, which held that face as EPA's minimum from its
 first step) certifies 96 more of the 939: 385 in all, the crossing's depths within
-1e-16 * scale and normals within 4e-8 rad of EPA's.  The other kinds have no ball
+1e-16 * scale and normals within 4e-8 rad of EPA's.  _crossing_global (session 33)
+certifies most crossings near an end as well (778 of 965 crossings among 2,895 deep
+pairs of three seeds of the benchmark's cases, against 260 by the balls alone), and
+bench/ab_deep.py against 801022d measured the row at 0.86x the time, results within
+2.6e-16 * scale on 20,000 cases.  The other kinds have no ball
 about a witness inside the other cylinder as deep as the depth: crossings near a
-cylinder's end (a cap cuts the balls short; gjk_epa._cylinders_crossing hands their
-face to EPA), two rims, and rims whose ball the other's cap or side cuts short.
+cylinder's end that _crossing_global's bound misses (gjk_epa._cylinders_crossing
+hands their face to EPA), two rims, and rims whose ball the other's cap or side cuts short.
 
 Witness points (A's frame, cores): p and its translate by the depth along n on the
 other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
@@ -218,7 +224,8 @@ def _crossing_depth(sa, sb, r_ab, t_ab, tol, res):
     B's axis) at B's axial coordinate u, so its ball in B has the radius min(r_b - |r_b
     - h|, l_b - |u|), and it is a point of A when |s| <= l_a; pb's in A likewise.
     Either ball >= h - tol certifies h; they fall short where a cap cuts them (the
-    crossing near a cylinder's end).  Returns h (certified, res written), or minus the
+    crossing near a cylinder's end), and _crossing_global's bound over all directions
+    is tried instead.  Returns h (certified, res written), or minus the
     gap -h when h <= 0 (the face's plane separates the cores; _apart_out), or 0."""
     nx, ny, h, s, u, sn = sides_crossing(sa, sb, r_ab, t_ab)
     if not sn > 0.0:

@@ -174,6 +174,14 @@ def support_core_xyz(code, prm, verts, v0, vn, dx, dy, dz):
     return 0.0, 0.0, 0.0
 
 
+@njit_inline
+def _group_bound(grp, g, dx, dy, dz, dn):
+    """The bound c . d + r |d| (dn = |d|) of run g's bounding ball (_grouped_support):
+    no point of the run lies farther along d."""
+    return (grp[2 * g, 0] * dx + grp[2 * g, 1] * dy + grp[2 * g, 2] * dz
+            + grp[2 * g + 1, 0] * dn)
+
+
 @njit_kernel
 def _grouped_support(prm, verts, v0, vn, dx, dy, dz):
     """support_core_xyz of a convex hull stored in groups (hull.support_groups: runs of
@@ -192,8 +200,7 @@ def _grouped_support(prm, verts, v0, vn, dx, dy, dz):
     top = 0
     top_bound = -np.inf
     for g in range(ng):
-        b = (grp[2 * g, 0] * dx + grp[2 * g, 1] * dy + grp[2 * g, 2] * dz
-             + grp[2 * g + 1, 0] * dn)
+        b = _group_bound(grp, g, dx, dy, dz, dn)
         if b > top_bound:
             top_bound = b
             top = g
@@ -205,8 +212,7 @@ def _grouped_support(prm, verts, v0, vn, dx, dy, dz):
         if q >= 0:
             if g == top:
                 continue
-            b = (grp[2 * g, 0] * dx + grp[2 * g, 1] * dy + grp[2 * g, 2] * dz
-                 + grp[2 * g + 1, 0] * dn)
+            b = _group_bound(grp, g, dx, dy, dz, dn)
             if b + slack < best:
                 continue
         lo = int(grp[2 * g + 1, 1])

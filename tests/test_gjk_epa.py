@@ -1357,9 +1357,9 @@ def test_crossing_global_certificate_holds_on_every_direction():
     # then rings from the concavity of h along rays and the shadow's eight edge
     # normals).  Checked on random crossings (A on the z axis at the origin, B anywhere):
     # wherever it certifies, h_{A-B} over 200,000 random unit directions plus 2,000
-    # within 0.05 rad of n is never below h - tol; and it certifies at least a fifth
-    # of the crossings whose witnesses are both on their segments (measured: 335 of
-    # 628), at least 50 of them where neither ball does (measured: 172).
+    # within 0.05 rad of n is never below h - tol; and it certifies at least 40% of
+    # the crossings whose witnesses are both on their segments (measured: 386 of 603),
+    # at least 100 of them where neither ball does (measured: 224).
     from mkcollision_ros.kernels.cylcyl import _crossing_global
     from mkcollision_ros.kernels.geometry import quat_to_matrix
     rng = np.random.default_rng(83)
@@ -1395,8 +1395,8 @@ def test_crossing_global_certificate_holds_on_every_direction():
               + rb * np.sqrt(np.maximum(0.0, 1.0 - (w @ b) ** 2)) + lb * np.abs(w @ b)
               - w @ t)
         assert hw.min() >= h - tol
-    assert certified >= 0.2 * tried
-    assert beyond_ball >= 50
+    assert certified >= 0.4 * tried
+    assert beyond_ball >= 100
 
 
 @pytest.mark.parametrize("order", ["capsule-cylinder", "cylinder-capsule",

@@ -54,10 +54,9 @@ per pair over all 2,000 (a loop calling it alone, less the loop's own ~27 ns), a
 run against GJK + EPA at 7cbaae1, which held that face as EPA's minimum from its
 first step) certifies 96 more of the 939: 385 in all, the crossing's depths within
 1e-16 * scale and normals within 4e-8 rad of EPA's.  _crossing_global (session 33)
-certifies most crossings near an end as well (778 of 965 crossings among 2,895 deep
-pairs of three seeds of the benchmark's cases, against 260 by the balls alone), and
-bench/ab_deep.py against 801022d measured the row at 0.86x the time, results within
-2.6e-16 * scale on 20,000 cases.  The other kinds have no ball
+certifies most crossings near an end as well (889 of 965 crossings among 2,895 deep
+pairs of three seeds of the benchmark's cases, against 260 by the balls alone); see
+BENCHMARKS.md, session 33, for the time.  The other kinds have no ball
 about a witness inside the other cylinder as deep as the depth: crossings near a
 cylinder's end that _crossing_global's bound misses (gjk_epa._cylinders_crossing
 hands their face to EPA), two rims, and rims whose ball the other's cap or side cuts short.
@@ -78,7 +77,8 @@ _CC_HALF_TAN_DONE = 5e-5  # a step this short ends the search (1e-4 rad; the ang
                           # error is then of its square, and the ball's of its square)
 CC_RIMS = 2             # rims solved at most, deepest bound first (measured on the
                         # benchmark's cases: 1 certifies 7% fewer pairs, 3 or 4 no more)
-CC_CROSS_RINGS = 8       # rings of _crossing_global (measured: 8 certify as many as 30)
+CC_CROSS_RINGS = 16      # rings of _crossing_global at most (measured: 8 certify 14
+                         # fewer of 965 crossings, 30 two more)
 HC_GJK_ITERS = 16       # steps of the 2-D GJK on a hull's shadow (~4 taken)
 
 
@@ -182,17 +182,20 @@ def _crossing_global(ra, la, rb, lb, h, s, u, sn, c, tol):
          _end_room of m_a / ra and m_b / rb (both witnesses on their segments).
       2. g(x) = h(w) + T v is, on each of the four sectors where x . a and x . b keep
          their signs, concave in x (sqrt(1 - y^2) of a linear y is; |y| is linear
-         there), and g(0) = ra + rb.  On the unit circle g is the support function of
-         the in-plane shadow of A - B (two rectangles' sum, shifted by -t's part), so
-         its least value P is at one of the shadow's eight edge normals +-a, +-b and
-         their in-plane squares, given P > 0 (the origin inside).  Along a ray from
-         the origin, concavity gives g(x) >= ra + rb - |x| D with D = ra + rb - P.
+         there), and g = ra + rb + F_a + F_b >= ra + rb on the inner disc.  On the
+         unit circle g is the support function of the in-plane shadow of A - B (two
+         rectangles' sum, shifted by -t's part), so its least value P is at one of the
+         shadow's eight edge normals +-a, +-b and their in-plane squares, given P > 0
+         (the origin inside).  Along a ray, concavity between the disc's edge and the
+         circle gives g(x) >= ra + rb - (|x| - rho0) / (1 - rho0) D, D = ra + rb - P.
       3. So on the ring rho_i <= |x| <= rho_(i+1), h(w) - h >= T (1 - sqrt(1 -
-         rho_i^2)) - rho_(i+1) D, which is >= -tol up to rho_(i+1) = (T (1 - sqrt(1 -
-         rho_i^2)) + tol) / D.  Rings from rho0 outward (at most CC_CROSS_RINGS) that
-         reach |x| = 1 cover every w.  D <= tol covers every w at once.
+         rho_i^2)) - (rho_(i+1) - rho0) / (1 - rho0) D, which is >= -tol up to
+         rho_(i+1) = rho0 + (1 - rho0) (T (1 - sqrt(1 - rho_i^2)) + tol) / D.  Rings
+         from rho0 outward (at most CC_CROSS_RINGS) that reach |x| = 1 cover every w.
+         D <= tol covers every w at once.
     Measured (bench cases, 2,895 deep cylinder pairs, 965 of them at a crossing): the
-    witnesses' balls certify 260 of the 965, this 708, both 778; never one whose depth
+    witnesses' balls certify 260 of the 965, this 858, both 889 (with the chord from
+    the origin instead of from the disc's edge, 708 and 778); never one whose depth
     (GJK + EPA) is below h - tol."""
     ma, mb = la - abs(s), lb - abs(u)
     if not (h > 0.0 and ma >= 0.0 and mb >= 0.0):
@@ -206,11 +209,13 @@ def _crossing_global(ra, la, rb, lb, h, s, u, sn, c, tol):
     if d <= tol:
         return True
     big_t = ra + rb - h
-    rho = min(_end_room(ma / ra), _end_room(mb / rb))
+    rho0 = min(_end_room(ma / ra), _end_room(mb / rb))
+    rho = rho0
     for _ in range(CC_CROSS_RINGS):
         if rho >= 1.0:
             return True
-        nxt = (big_t * rho * rho / (1.0 + math.sqrt(1.0 - rho * rho)) + tol) / d
+        nxt = rho0 + (1.0 - rho0) * (big_t * rho * rho / (1.0 + math.sqrt(1.0 - rho * rho))
+                                     + tol) / d
         if not nxt > rho:
             return False
         rho = nxt

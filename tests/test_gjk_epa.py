@@ -1338,9 +1338,9 @@ def test_cylinder_pair_ball_certified_depth_is_global():
     # the normal to both axes against a witness's ball or, near a cylinder's end,
     # against cylcyl._crossing_global's bound.  Checked on random pairs as
     # _check_certified_shortcut says.  At least 20% of the penetrating pairs are
-    # certified (measured here 287 of 750, 38%: these overlaps are deep, up to the
+    # certified (measured here 316 of 750, 42%: these overlaps are deep, up to the
     # centres' coinciding; 160 before _crossing_global), at least 100 of them by the
-    # crossing (measured here: 171; 44 with the witnesses' balls alone), whose normal is
+    # crossing (measured here: 200; 44 with the witnesses' balls alone), whose normal is
     # square to both axes.
     certified, pen, found = _check_certified_shortcut(31, ("cylinder", "cylinder"), 60,
                                                       0.0)

@@ -1,12 +1,15 @@
-"""Where a row's time goes: bench/narrowphase.py's cases of a shape row split into the
-pairs that are apart and those that touch (and the deep ones, > 1e-3 * scale), each
-subset timed on its own with our contacts mode (auto, cutoff 0), our MPR and MuJoCo's
-collision pass (defaults), one thread.
+"""Where a row's time goes: the cases of a shape row split by regime, each subset timed
+on its own, our contacts mode (auto, cutoff 0, one thread) alternated with MuJoCo's
+collision pass (defaults) as bench/vs_mujoco.py does (the ratio of each peer's fastest
+round; figures of runs timed back to back wandered by 2x on this machine).
 
-    PYTHONPATH=. .venv/bin/python bench/regimes.py [ROW ...] [--n 1000]
+    PYTHONPATH=. .venv/bin/python bench/regimes.py [ROW ...] [--n 2000] [--rounds 41]
 
-The cases are those of the narrow-phase benchmark with seed 1 (its default seed is 0;
-any seed gives the same picture).
+Regimes: apart with bounding spheres apart (both sides' pre-test ends them), apart
+with bounding spheres overlapping (the narrow phase proves them apart), touching or
+shallow (depth up to 1e-3 * scale) and deep.  "share" is the subset's part of our
+time over the whole row (pairs times time per pair).  The cases are the row's in
+bench/vs_mujoco.py (bench/narrowphase.py's seed formula).
 """
 import argparse
 import os
@@ -17,14 +20,14 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from bench.common import KINDS, pair_cases  # noqa: E402
-from bench.narrowphase import run_mujoco, run_ours  # noqa: E402
-from mkcollision_ros.kernels.constants import (M_AUTO, M_MPR, ST_PENETRATING,  # noqa: E402
-                                               ST_TOUCHING)
+from bench.common import pair_cases  # noqa: E402
+from bench.narrowphase import run_ours  # noqa: E402
+from bench.vs_mujoco import alternated, row_seed, summary  # noqa: E402
+from mkcollision_ros.kernels.constants import M_AUTO, ST_PENETRATING, ST_TOUCHING  # noqa: E402
 from mkcollision_ros.shapes import build_table  # noqa: E402
 
-ROWS = ("cylinder-cylinder", "box-cylinder", "ellipsoid-cylinder", "convex-convex",
-        "box-convex")
+ROWS = ("cylinder-cylinder", "box-cylinder", "ellipsoid-cylinder", "ellipsoid-box",
+        "ellipsoid-convex", "cylinder-convex")
 
 
 def subset(shapes, pos, quat, idx):
@@ -37,30 +40,37 @@ def subset(shapes, pos, quat, idx):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("rows", nargs="*", default=ROWS)
-    ap.add_argument("--n", type=int, default=1000)
+    ap.add_argument("--n", type=int, default=2000)
+    ap.add_argument("--rounds", type=int, default=41)
     args = ap.parse_args()
     numba.set_num_threads(1)
+    print("| pair | regime | pairs | contacts µs | mujoco µs | ratio | share of our time |")
+    print("|---|---|---|---|---|---|---|")
     for row in args.rows:
         a, b = row.split("-")
-        shapes, table, pairs, pos, quat = pair_cases(
-            a, b, args.n, seed=1 + 101 * KINDS.index(a) + KINDS.index(b))
-        _, st, out = run_ours(table, pairs, pos, quat, M_AUTO, 5)
+        shapes, table, pairs, pos, quat = pair_cases(a, b, args.n, seed=row_seed(a, b))
+        _, st, out = run_ours(table, pairs, pos, quat, M_AUTO, 1, 0.0)
         hit = (st == ST_TOUCHING) | (st == ST_PENETRATING)
-        scale = table.params[0::2, 7] + table.params[1::2, 7]
-        for name, sel in (("apart", ~hit), ("touching", hit),
+        radius = table.params[:, 7]
+        scale = radius[0::2] + radius[1::2]
+        spheres_apart = np.linalg.norm(pos[1::2] - pos[0::2], axis=1) > scale
+        parts = []
+        for name, sel in (("apart, spheres apart", ~hit & spheres_apart),
+                          ("apart, spheres overlap", ~hit & ~spheres_apart),
+                          ("touching or shallow", hit & (-out[:, 0] <= 1e-3 * scale)),
                           ("deep", hit & (-out[:, 0] > 1e-3 * scale))):
             idx = np.flatnonzero(sel)
             if len(idx) == 0:
                 continue
-            sub, tb, pr, ps, qs = subset(shapes, pos, quat, idx)
-            t_con = run_ours(tb, pr, ps, qs, M_AUTO, 7, 0.0)[0]
-            t_mpr = run_ours(tb, pr, ps, qs, M_MPR, 7)[0]
-            t_mj = run_mujoco(sub, ps, qs, len(idx), 7)[0]
-            mj = "n/a" if t_mj is None else f"{t_mj * 1e6:5.2f}"
-            ratio = "" if t_mj is None else f"   contacts/mujoco {t_con / t_mj:4.2f}"
-            print(f"{row:20s} {name:8s} n={len(idx):4d}  us per pair: contacts "
-                  f"{t_con * 1e6:5.2f}  mpr {t_mpr * 1e6:5.2f}  mujoco {mj}{ratio}",
-                  flush=True)
+            got = alternated(*subset(shapes, pos, quat, idx), args.rounds, 1)
+            parts.append((name, len(idx), None if got is None else summary(*got)))
+        total = sum(k * s[0] for _, k, s in parts if s is not None)
+        for name, k, s in parts:
+            if s is None:
+                print(f"| {row} | {name} | {k} | n/a | n/a | n/a | n/a |")
+                continue
+            print(f"| {row} | {name} | {k} | {s[0]:.3f} | {s[1]:.3f} | {s[2]:.2f} "
+                  f"| {100 * k * s[0] / total:.0f}% |", flush=True)
 
 
 if __name__ == "__main__":

@@ -58,11 +58,11 @@ def fastest(fn, inner):
     return best
 
 
-def row(a, b, n, rounds, inner):
-    """(ours µs, MuJoCo µs, their ratio: each the fastest of all rounds; the
-    per-round ratio's median, lowest, highest), or None."""
+def alternated(shapes, table, pairs, pos, quat, rounds, inner):
+    """Per-pair seconds of our contacts mode and of MuJoCo's pass on the same cases,
+    one of each per round: (ours, theirs) lists, or None where MuJoCo lacks a shape."""
     import mujoco
-    shapes, table, pairs, pos, quat = pair_cases(a, b, n, seed=row_seed(a, b))
+    n = len(pairs)
     built = build_mujoco(shapes, pos, quat, n)
     if built is None:
         return None
@@ -77,9 +77,21 @@ def row(a, b, n, rounds, inner):
     for _ in range(rounds):
         ours.append(fastest(lambda: collide_batch(*args), inner) / n)
         theirs.append(fastest(lambda: mujoco.mj_collision(model, data), inner) / n)
+    return ours, theirs
+
+
+def summary(ours, theirs):
+    """(ours µs, MuJoCo µs, their ratio: each the fastest of all rounds; the per-round
+    ratio's median, lowest, highest)."""
     r = np.array(ours) / np.array(theirs)
     return (min(ours) * 1e6, min(theirs) * 1e6, min(ours) / min(theirs),
             float(np.median(r)), float(r.min()), float(r.max()))
+
+
+def row(a, b, n, rounds, inner):
+    """summary() of the row a-b on its n cases, or None."""
+    got = alternated(*pair_cases(a, b, n, seed=row_seed(a, b)), rounds, inner)
+    return None if got is None else summary(*got)
 
 
 def main():

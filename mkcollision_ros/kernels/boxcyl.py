@@ -38,8 +38,18 @@ R^3, so if f < 0 somewhere in the cell, g's least value over the cell's cone is 
 on its border (excluded) or g's global minimum over the sphere, at -x / |x| for x the
 disc's point nearest the origin, which then lies in the cell (_cells_positive tests the
 16 cells).  A pair that only touches fails one of these (f ~ 0 over the normal cone of
-the touching point), and GJK/EPA handle it.  Most pairs apart are sent to GJK by the
-first test, f < 0 along the line of centres.
+the touching point), and GJK/EPA handle it.
+
+Proof of separation, without GJK.  f(m) < 0 for a unit m means every point of box -
+cylinder lies at least -f(m) below the origin along m: the cores are at least that far
+apart.  So the first test, f along the line of centres, and the candidates, which
+hold the box's face normals and the pole as a separating axis test would, end most
+pairs apart with that gap as the distance bound (_apart_out; gjk_epa.gjk_epa_ws takes
+it in contacts mode when it clears the touching band, as cylcyl's planes).  Measured
+(session 35, pure Python, bench/deep_pairs.py's 2,000 box-cylinder cases, both orders):
+925 of the 961 pairs apart end here, against 0 GJK steps for about half of them and
+4-8 steps for the rest before; no bound lies above GJK's exact distance by more than
+1.1e-13 m, at scales of about 1 m (inside GJK's own tolerance, 1e-12 * scale).
 
 The bound on a box circle.  On the circle normal to a_i, in the plane of a_j, a_k,
 f is the support function of a 2-D convex set: the box's rectangle plus the projected
@@ -384,20 +394,56 @@ def _cells_positive(A, c, e, r, hc):
     return True
 
 
+@njit_inline
+def _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, gap, mx, my, mz):
+    """Cores proved apart along the unit m (the cylinder's frame, from the box to the
+    cylinder) by f(m) = -gap < 0: every point of box - cylinder lies at least gap
+    below the origin along m, so the cores are at least gap apart.  res = [-gap, n
+    (A to B), pa, pb] in A's frame, pa and pb the two cores' support points along n
+    and -n (points of the cores, not the closest ones: as GJK's bound, see
+    gjk_epa.gjk_epa_ws); returns -gap."""
+    bx, by, bz = c[0], c[1], c[2]
+    for i in range(3):
+        s = e[i] if A[i, 0] * mx + A[i, 1] * my + A[i, 2] * mz >= 0.0 else -e[i]
+        bx += s * A[i, 0]
+        by += s * A[i, 1]
+        bz += s * A[i, 2]
+    # the cylinder's support along -m: its rim's point opposite m's horizontal part
+    # (the cap's centre when m is the axis), on the cap m points away from
+    mn = math.sqrt(mx * mx + my * my)
+    cx, cy = (-r * mx / mn, -r * my / mn) if mn > 0.0 else (0.0, 0.0)
+    cz = -hc if mz > 0.0 else hc
+    res[0] = -gap
+    if box_a:
+        # to A's (the box's) frame: x_A = r_ab x_B + t_ab
+        for q in range(3):
+            res[1 + q] = r_ab[q, 0] * mx + r_ab[q, 1] * my + r_ab[q, 2] * mz
+            res[4 + q] = r_ab[q, 0] * bx + r_ab[q, 1] * by + r_ab[q, 2] * bz + t_ab[q]
+            res[7 + q] = r_ab[q, 0] * cx + r_ab[q, 1] * cy + r_ab[q, 2] * cz + t_ab[q]
+    else:
+        res[1], res[2], res[3] = -mx, -my, -mz
+        res[4], res[5], res[6] = cx, cy, cz
+        res[7], res[8], res[9] = bx, by, bz
+    return -gap
+
+
 @njit_kernel
 def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
     """The depth of a box and a cylinder (shape tuples sa, sb, one of each, B's pose
     r_ab, t_ab in A's frame) whose cores overlap, as the module doc says.  ``scratch``
     float64 (>= BC_MAX_LEVEL + 8, 3).  On success writes res[:10] = [depth, n (3),
     pa (3), pb (3)] in A's frame (n from A to B, pa on A's core, pb on B's core,
-    pb - pa == -depth * n) as _epa does, and returns the minimum's type (1 to 5);
-    returns 0, res untouched, when the answer is not certified."""
+    pb - pa == -depth * n) as _epa does, and returns the depth (> 0).  Where the line
+    of centres or a candidate direction has f < 0, the cores are apart: res = [-gap,
+    ...] (_apart_out) and returns -gap, which gjk_epa.gjk_epa_ws takes as GJK's
+    distance bound in contacts mode (as cylcyl's planes).  Returns 0, res untouched,
+    when the answer is neither certified nor apart."""
     box_a = sa[0] == BOX
     pbox = sa[1] if box_a else sb[1]
     pcyl = sb[1] if box_a else sa[1]
     r, hc = pcyl[0], pcyl[1]
     if not (r > 0.0 and hc > 0.0):
-        return 0
+        return 0.0
     A = scratch[0:3]            # box axes (rows) in the cylinder's frame
     c = scratch[3]              # box centre there
     e = scratch[4]              # half extents
@@ -417,17 +463,26 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
     tol = EPA_REL_TOL * scale
     # apart along the line of centres (most pairs apart end here)
     cn = math.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-    if cn > 0.0 and not _f(A, c, e, r, hc, -c[0] / cn, -c[1] / cn, -c[2] / cn) > tol:
-        return 0
+    if cn > 0.0:
+        mx, my, mz = -c[0] / cn, -c[1] / cn, -c[2] / cn
+        fc = _f(A, c, e, r, hc, mx, my, mz)
+        if not fc > tol:
+            if fc < 0.0:
+                return _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, -fc, mx, my, mz)
+            return 0.0
     best, bt, mx, my, mz = _candidates(A, c, e, r, hc)
+    if best < 0.0:
+        # apart along a candidate (a face normal, a pole, z x a box axis, or the
+        # crease opposite a box vertex): as a separating axis test
+        return _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, -best, mx, my, mz)
     if not (best > tol and _cells_positive(A, c, e, r, hc)):
-        return 0
+        return 0.0
     cand = scratch[5]
     stack = scratch[6:]
     for i in range(3):
         ok, b2 = _circle_certified(A, c, e, r, hc, i, best, tol, stack, cand)
         if not ok:
-            return 0
+            return 0.0
         if b2 < best:
             best, bt = b2, 4
             mx, my, mz = cand[0], cand[1], cand[2]
@@ -437,7 +492,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
         # a rim point against a box face, or (type 4) a box edge
         s = math.sqrt(mx * mx + my * my)
         if not (s > _BC_FEAT and abs(mz) > _BC_FEAT):
-            return 0                    # a cap or a side line, not a point: EPA
+            return 0.0                  # a cap or a side line, not a point: EPA
         cpx, cpy, cpz = -r * mx / s, -r * my / s, (-hc if mz > 0.0 else hc)
         bpx, bpy, bpz = cpx + d * mx, cpy + d * my, cpz + d * mz
     else:
@@ -448,7 +503,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
             am = A[q, 0] * mx + A[q, 1] * my + A[q, 2] * mz
             if abs(am) <= _BC_FEAT:
                 if ii >= 0:
-                    return 0
+                    return 0.0
                 ii = q
                 continue
             s = e[q] if am > 0.0 else -e[q]
@@ -457,15 +512,15 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
             vz += s * A[q, 2]
         if bt != 2:
             if ii >= 0:
-                return 0
+                return 0.0
             bpx, bpy, bpz = vx, vy, vz
             cpx, cpy, cpz = vx - d * mx, vy - d * my, vz - d * mz
         else:
             if ii < 0:
-                return 0
+                return 0.0
             ax, ay, az = A[ii, 0], A[ii, 1], A[ii, 2]
             if not abs(az) < 1.0 - _BC_FEAT:
-                return 0
+                return 0.0
             # edge point v + lam a against side-line point -r m + mu z:
             # lam a - mu z = (d - r) m - v
             qx, qy, qz = (d - r) * mx - vx, (d - r) * my - vy, -vz
@@ -489,4 +544,4 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
         res[4], res[7] = meet(cpx, bpx, d * mx)
         res[5], res[8] = meet(cpy, bpy, d * my)
         res[6], res[9] = meet(cpz, bpz, d * mz)
-    return bt
+    return d

@@ -2613,26 +2613,21 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
     res = ws[1][_RES:_RES + 10]
-    if (sa[0] == BOX and sb[0] == CYLINDER) or (sa[0] == CYLINDER and sb[0] == BOX):
-        # a box and a cylinder whose cores overlap: the exact depth in closed form,
-        # certified, without GJK or EPA (boxcyl); cores that the line of centres or
-        # one of boxcyl's candidate directions proves apart by more than the cutoff
-        # and the touching band end with that gap as the distance bound, as GJK would
-        # stop there too; else (touching, or not certified) GJK and EPA as for any pair
-        dbc = box_cylinder_depth(sa, sb, r_ab, t_ab, scale, fs[_V:_V + _BC_ROWS], res)
-        if dbc > 0.0 or (dbc < 0.0 and -dbc - ra - rb > band):
-            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     if sa[0] == CYLINDER or sb[0] == CYLINDER:
-        # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl): cores
-        # that overlap, one core's point as deep inside the cylinder as h along the
-        # normal there, get that depth certified by a ball; cores that a plane (a cap's,
-        # the side's tangent plane, the sides' crossing) proves apart by more than the
-        # cutoff and the touching band end with that gap as the distance bound, as GJK
-        # would stop there too.  Either without GJK or EPA; else GJK and EPA
+        # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl), or a
+        # box (boxcyl: the exact depth in closed form): cores that overlap get their
+        # depth certified (cylcyl: one core's point as deep inside the cylinder as h
+        # along the normal there, by a ball); cores that a plane (a cap's, the side's
+        # tangent plane, the sides' crossing; for a box, the line of centres or one of
+        # boxcyl's candidate directions) proves apart by more than the cutoff and the
+        # touching band end with that gap as the distance bound, as GJK would stop
+        # there too.  Either without GJK or EPA; else GJK and EPA
         other = sb[0] if sa[0] == CYLINDER else sa[0]
         d = 0.0
         if other == CYLINDER:
             d = cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res)
+        elif other == BOX:
+            d = box_cylinder_depth(sa, sb, r_ab, t_ab, scale, fs[_V:_V + _BC_ROWS], res)
         elif other == CAPSULE:
             d = segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res)
         elif other == ELLIPSOID:

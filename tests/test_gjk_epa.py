@@ -1380,6 +1380,38 @@ def test_rolling_ball_certificate_is_a_lower_bound_on_the_depth(kind):
     assert accepted >= 0.25 * deep
     assert beyond_points >= 10
 
+def test_box_vertex_minimum_against_an_ellipsoid_is_the_depth():
+    # EPA's Newton minimum in a box vertex's region against an ellipsoid
+    # (gjk_epa._vertex_cap): kept under the plane test in the cap no box crease
+    # crosses, where the box's support is that one vertex.  Checked on the deep pairs
+    # of 2,000 random ellipsoid-box pairs (box as A or B) whose normal lies in a
+    # vertex's region (more than 0.05 rad from every crease of the box): the depth is
+    # never deeper than the slow oracle's minimum of h over directions by more than
+    # 1e-8 * scale (a minimum kept while a deeper one lies elsewhere would be), and at
+    # least 25 such pairs are found (measured: 54 of 1,766 deep pairs).
+    rng = np.random.default_rng(362)
+    found = 0
+    for order in (("ellipsoid", "box"), ("box", "ellipsoid")):
+        sa, pa, qa, sb, pb, qb = O.random_pairs(rng, *order, 1000, offset=(0.0, 0.8))
+        out, st = O.run_batch(sa, pa, qa, sb, pb, qb)
+        for k in np.flatnonzero(st == ST_PENETRATING):
+            scale = O.bounding_radius(sa[k]) + O.bounding_radius(sb[k])
+            depth = -out[k, OUT_DIST]
+            if not depth > 1e-3 * scale:
+                continue
+            qbox = qa[k] if order[0] == "box" else qb[k]
+            axes = O.quat_matrix(qbox / np.linalg.norm(qbox))
+            n = out[k, OUT_NORMAL:OUT_NORMAL + 3]
+            if np.abs(axes.T @ n).min() <= math.sin(0.05):
+                continue
+            found += 1
+            pose_a = (pa[k], qa[k] / np.linalg.norm(qa[k]))
+            pose_b = (pb[k], qb[k] / np.linalg.norm(qb[k]))
+            sd, _ = O.signed_distance_oracle(sa[k], pose_a, sb[k], pose_b, n_start=2000,
+                                             n_keep=6, n_iter=200)
+            assert depth <= -sd + 1e-8 * scale
+    assert found >= 25
+
 def _cylinder_shortcut(kinds):
     """cylcyl's shortcut for a cylinder and the other kind of ``kinds`` (boxcyl's for a
     box), as f(shape_a, shape_b, verts, r_ab, t_ab, scale, res)."""

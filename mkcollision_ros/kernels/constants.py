@@ -97,6 +97,8 @@ EPA_KINK_CAP_BOX = 0.1     # and on a box edge's crease against an ellipsoid: at
                            # 1 of 100,000 random pairs kept a minimum 3e-4 * scale too
                            # deep, the true one in a vertex's region 0.2 rad away (none
                            # at 0.1 or 0.05; 0.1 takes 18.1 steps, 0.05 18.8)
+EPA_VERTEX_CAP_MIN = 0.05  # least basin cap for a box vertex's minimum against an ellipsoid
+                           # (gjk_epa._vertex_cap): its angle to the box's nearest crease
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements

@@ -189,6 +189,7 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         POLISH_STEP_DONE, SPHERE,
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
+from .analytic import _point_box, _point_cylinder
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
 from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
                      segment_cylinder_depth, sides_crossing)
@@ -1811,24 +1812,16 @@ def _in_side_frame(side, r_ab, t_ab, x, y, z):
 def _core_depth(side, sa, sb, r_ab, t_ab, x, y, z):
     """The signed depth of the point x (A's frame) in the core of the shape on ``side``
     when that core is a cylinder or a box: _core_inradius inside, minus the distance
-    to the core outside; -inf for every other shape."""
+    to the core outside (analytic's point-against-core distances, negated); -inf for
+    every other shape."""
     code = sa[0] if side == 0 else sb[0]
     prm = sa[1] if side == 0 else sb[1]
     if code != CYLINDER and code != BOX:
         return -np.inf
     px, py, pz = _in_side_frame(side, r_ab, t_ab, x, y, z)
     if code == CYLINDER:
-        gr = math.sqrt(px * px + py * py) - prm[0]
-        gz = abs(pz) - prm[1]
-        if gr <= 0.0 and gz <= 0.0:
-            return -max(gr, gz)
-        gr, gz = max(gr, 0.0), max(gz, 0.0)
-        return -math.sqrt(gr * gr + gz * gz)
-    gx, gy, gz = abs(px) - prm[0], abs(py) - prm[1], abs(pz) - prm[2]
-    if gx <= 0.0 and gy <= 0.0 and gz <= 0.0:
-        return -max(gx, max(gy, gz))
-    gx, gy, gz = max(gx, 0.0), max(gy, 0.0), max(gz, 0.0)
-    return -math.sqrt(gx * gx + gy * gy + gz * gz)
+        return -_point_cylinder(prm[0], prm[1], px, py, pz)[0]
+    return -_point_box(prm[0], prm[1], prm[2], px, py, pz)[0]
 
 
 @njit_inline

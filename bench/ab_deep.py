@@ -14,6 +14,7 @@ borrowed arrays, one workspace, ``--cutoff`` 0 as in contacts mode).
     ... --no-time --n 100000        # results only, on many pairs
     ... --check-n 100000            # also results only on that many other cases per
                                     # row (seed + 1), in the same process: one compile
+    ... --cutoff inf                # exact distances: the pairs apart compare too
 
 Cases: bench.common.pair_cases(a, b, n, seed) with ``--seed``.  "deep" pairs are those
 deeper than 1e-3 * scale by the revision's result, "apart" those it finds apart whose
@@ -130,6 +131,12 @@ def main():
                     f"{max(lower.max(initial=0.0), 0.0):.1e} * scale, higher by <= "
                     f"{max(-lower.min(initial=0.0), 0.0):.1e}, normal <= "
                     f"{(ang.max() if ang.size else 0.0):.1e} rad")
+            if not np.isfinite(args.cutoff):
+                # exact distances (cutoff inf): the pairs apart in both compare too
+                apart = (ro[:, 0] > 0.0) & (oo[:, 0] > 0.0)
+                diff = np.abs(ro[apart, 0] - oo[apart, 0]) / scale[apart]
+                line += (f", apart {apart.sum()}: distance within "
+                         f"{diff.max(initial=0.0):.1e} * scale")
             if timed:
                 if args.subset == "deep":
                     sel = np.flatnonzero(ro[:, 0] < -1e-3 * scale)

@@ -103,6 +103,27 @@ def _newton_turn(cs, sn, g, hh):
 
 
 @njit_inline
+def gap_newton_step(al, be, ga, cx, cy, cs, sn):
+    """One step of Newton's method towards the maximum over t of g(t) = cx cos t +
+    cy sin t - sqrt(q(t)) (+ a constant), q(t) = m^T S m = al + be cos 2t + ga sin 2t
+    for m = (cos t, sin t) in a plane (S's 2x2 block there): how far an ellipsoid's core
+    lies beyond the line through the origin normal to m.  (cs, sn) = (cos t, sin t).
+    Returns (sqrt(q(t)), the next (cos, sin), done as _newton_turn's)."""
+    c2t, s2t = cs * cs - sn * sn, 2.0 * cs * sn
+    sq = al + be * c2t + ga * s2t
+    rs = math.sqrt(sq)
+    d1 = 2.0 * (ga * c2t - be * s2t)            # q'
+    d2 = -4.0 * (be * c2t + ga * s2t)           # q''
+    # g' and g'' times 2 q^(3/2) > 0: their ratio, the Newton step, unchanged
+    f = 2.0 * sq * rs
+    g1 = f * (cy * cs - cx * sn) - sq * d1
+    g2 = -f * (cx * cs + cy * sn) - sq * d2 + 0.5 * d1 * d1
+    # a maximum of g: a minimum of -g
+    ncs, nsn, done = _newton_turn(cs, sn, -g1, -g2)
+    return rs, ncs, nsn, done
+
+
+@njit_inline
 def _rim_nearest_axis(cx, cy, cz, ux, uy, uz, vx, vy, vz, rho):
     """The point (x, y, z) of the circle c + rho (cos t u + sin t v) (u, v orthonormal)
     at a local minimum of its distance from the z axis: Newton's method on
@@ -551,22 +572,13 @@ def ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     if cn > 0.0:
         cs, sn = cx / cn, cy / cn
     for _ in range(CC_NEWTON_ITERS):
-        c2t, s2t = cs * cs - sn * sn, 2.0 * cs * sn
-        sq = al + be * c2t + ga * s2t
-        rs = math.sqrt(sq)
+        rs, ncs, nsn, done = gap_newton_step(al, be, ga, cx, cy, cs, sn)
         g = cx * cs + cy * sn - rs + roll
         if g >= big_r:
             # K lies beyond the side's tangent plane along m: cores apart
             px, py, pz = _k_point(cx, cy, cz, s00, s01, s02, s11, s12, roll, cs, sn, rs)
             return _past_side(res, g, side, r_ab, t_ab, cs, sn, big_r, big_h, px, py, pz)
-        d1 = 2.0 * (ga * c2t - be * s2t)            # (m^T S m)'
-        d2 = -4.0 * (be * c2t + ga * s2t)           # (m^T S m)''
-        # g' and g'' times 2 (m^T S m)^(3/2) > 0: their ratio, the Newton step, unchanged
-        f = 2.0 * sq * rs
-        g1 = f * (cy * cs - cx * sn) - sq * d1
-        g2 = -f * (cx * cs + cy * sn) - sq * d2 + 0.5 * d1 * d1
-        # a maximum of g: a minimum of -g
-        cs, sn, done = _newton_turn(cs, sn, -g1, -g2)
+        cs, sn = ncs, nsn
         if done:
             break
     sq = s00 * cs * cs + 2.0 * s01 * cs * sn + s11 * sn * sn

@@ -191,6 +191,7 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         TOUCH_TOL)
 from .analytic import _point_box, _point_cylinder
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
+from .boxell import ellipsoid_box_depth, face_room
 from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
                      segment_cylinder_depth, sides_crossing)
 from .geometry import borrow_args, inflation, meet, minkowski_core_xyz, shape_scale
@@ -2008,13 +2009,7 @@ def _face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, k, s):
     prm = sa[1] if side == 0 else sb[1]
     # the radius of the largest disc about q's foot inside the face
     if code == BOX:
-        rin = np.inf
-        if k != 0:
-            rin = min(rin, prm[0] - abs(qx))
-        if k != 1:
-            rin = min(rin, prm[1] - abs(qy))
-        if k != 2:
-            rin = min(rin, prm[2] - abs(qz))
+        rin = face_room(prm, k, qx, qy, qz)
     else:
         rin = prm[0] - math.sqrt(qx * qx + qy * qy)
     if not rin >= 1e-7 * scale:
@@ -2746,6 +2741,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         elif other == CONVEX:
             d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
         if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
+            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+    elif _ellipsoid_box(sa[0], sb[0]):
+        # an ellipsoid against a box's face (boxell): the core depth certified by a
+        # ball, the cores' exact distance, or a face plane proving them apart
+        d, exact = ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
+        if exact or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,

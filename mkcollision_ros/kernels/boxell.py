@@ -69,7 +69,7 @@ from .jit import njit_inline, njit_kernel
 
 
 BE_POINT_ITERS = 40     # Newton steps on the Lagrange multiplier of a box vertex's nearest
-                        # point on the ellipsoid (monotone from t = 0; ~6-10 taken)
+                        # point on the ellipsoid (from t = 0, kept in the root's bracket)
 _BE_EXACT = 1e-12       # a distance is exact when its closest points are this much (times
                         # scale) farther apart than the separating plane's gap, at most
 
@@ -144,8 +144,8 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     ellipsoid_cylinder_depth maximises its g), the core's point p along -m and q, its
     foot on the edge.  Returns (status, g, m (3), p (3), q (3)): status 1 when g is the
     distance (p within the edge's length and |p - q| within _BE_EXACT * scale of g: the
-    plane normal to m at the edge separates by g and p, q are g apart), -1 or -2 when p
-    lies past the edge's end at -e_i or +e_i, 3 when an iterate's g, a separating
+    plane normal to m at the edge separates by g and p, q are g apart), 2 or -1 when p
+    lies past the edge's end at +e_i or -e_i, 3 when an iterate's g, a separating
     plane's gap (m between the faces' normals), already exceeds ``stop`` (then q is the
     edge's point nearest p), 0 otherwise."""
     ox = c[j] - sj * box[j]
@@ -248,6 +248,7 @@ def _vertex_distance(c, S, roll, ell, axes, box, sx, sy, sz, scale):
     exact = g > 0.0 and math.sqrt(ex * ex + ey * ey + ez * ez) - g <= _BE_EXACT * scale
     return exact, g, mx, my, mz, px, py, pz, qx, qy, qz
 
+
 @njit_inline
 def _face_normal(side, r_ab, k, s):
     """The normal from A to B (A's frame) that pushes the ellipsoid's core out of the box
@@ -261,8 +262,9 @@ def _face_normal(side, r_ab, k, s):
 @njit_kernel
 def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, vx, vy, vz,
                 kx, ky, kz, k, s, px, py, pz, scale, stop):
-    """The cores' exact distance when the core lies beyond the plane of the face s x_k
-    and its lowest point p's foot falls past the face's rim: over the edge along the
+    """The cores' exact distance when the core's lowest point p under the face s x_k
+    (beyond its plane or not) lies past the face's rim, where they may be apart over
+    the box's edge or vertex there: over the edge along the
     lateral axis p lies within (p past one lateral side), else over the vertex of p's
     signs; an edge whose nearest point lies past its end hands on to that vertex, and a
     vertex whose normal cone misses (p past both sides) to the edges along either side.

@@ -2691,7 +2691,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ST_SEPARATED with ``distance`` a certified lower bound (> cutoff), the separating
     direction as normal and the current simplex points (moved out by the radii) as
     witness points, which then are not the closest points (a cylinder with a cylinder,
-    a capsule, an ellipsoid or a hull: cylcyl's separating planes likewise, before GJK).  A
+    a capsule, an ellipsoid or a hull: cylcyl's separating planes likewise, before GJK;
+    an ellipsoid and a box: boxell's face and edge planes).  A
     pipeline that wants contacts only passes 0 and saves the GJK steps that would
     refine a distance it throws away (as MuJoCo's collision pass, which reports no
     distances, does)."""
@@ -2743,8 +2744,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     elif _ellipsoid_box(sa[0], sb[0]):
-        # an ellipsoid against a box's face (boxell): the core depth certified by a
-        # ball, the cores' exact distance, or a face plane proving them apart
+        # an ellipsoid and a box (boxell): the core depth at a box face certified by a
+        # ball, the cores' exact distance over a face, an edge or a vertex, or a plane
+        # proving them farther apart than the cutoff and the touching band
         d, exact = ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
         if exact or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)

@@ -383,39 +383,34 @@ def ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, stop, res):
         qx = s * box[0] if k == 0 else min(box[0], max(-box[0], px))
         qy = s * box[1] if k == 1 else min(box[1], max(-box[1], py))
         qz = s * box[2] if k == 2 else min(box[2], max(-box[2], pz))
-        inside = ((k == 0 or abs(px) <= box[0]) and (k == 1 or abs(py) <= box[1])
-                  and (k == 2 or abs(pz) <= box[2]))
         if not h < 0.0:
             return 0.0, False           # the core touches the face's plane: GJK decides
-        if not inside and -h > stop:
-            return _apart_out(res, -h, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy,
-                              qz), False
-        if not inside:
+        if face_room(box, k, px, py, pz) >= 0.0:
+            # the closest points: p on the ellipsoid's core, its foot q on the box
+            return _exact_apart(res, side, r_ab, t_ab, -h, s if k == 0 else 0.0,
+                                s if k == 1 else 0.0, s if k == 2 else 0.0, px, py, pz, qx,
+                                qy, qz), True
+        if -h <= stop:
             # the foot past the face's rim: the nearest feature may be an edge or a vertex
             d, exact = _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux,
                                    uy, uz, vx, vy, vz, kx, ky, kz, k, s, px, py, pz, scale,
                                    stop)
             if d < 0.0:
                 return d, exact
-            return _apart_out(res, -h, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy,
-                              qz), False
-        # the closest points: p on the ellipsoid's core, its foot q on the box
-        return _exact_apart(res, side, r_ab, t_ab, -h, s if k == 0 else 0.0,
-                            s if k == 1 else 0.0, s if k == 2 else 0.0, px, py, pz, qx, qy,
-                            qz), True
+        return _apart_out(res, -h, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy, qz), False
     # the rolling ball at p: radius c_min^2 / w - r, centre p + s rho x_k; no larger
     # than h, so that its centre stays under the face (a smaller ball touching at p lies
     # inside the larger one)
     cmin = min(ell[0], min(ell[1], ell[2]))
     rho = min(h, max(0.0, (1.0 - 1e-12) * cmin * cmin / w - roll))
     # the centre's distances to the other five faces: the opposite one and the sides
-    room = min(2.0 * box[k] - (h - rho), face_room(box, k, px, py, pz))
+    fr = face_room(box, k, px, py, pz)
+    room = min(2.0 * box[k] - (h - rho), fr)
     # the centre inside the box (room >= 0), its depth there min(h - rho, room)
     if not (room >= 0.0 and rho + min(room, h - rho) >= h - EPA_REL_TOL * scale):
         # the lowest point under the face's plane but past its rim: the cores may still
         # be apart over an edge or a vertex
-        if ((k != 0 and abs(px) > box[0]) or (k != 1 and abs(py) > box[1])
-                or (k != 2 and abs(pz) > box[2])):
+        if fr < 0.0:
             d, exact = _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux,
                                    uy, uz, vx, vy, vz, kx, ky, kz, k, s, px, py, pz, scale,
                                    stop)

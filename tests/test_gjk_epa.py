@@ -1584,7 +1584,7 @@ def test_cover_bound_holds_on_every_direction():
         d2 = 2.0 * (c + tau * eta * k - p)
         ball = min(big_r - math.hypot(p[0], p[1]), big_h - abs(p[2]))
         for radial, s in ((True, 0.0), (False, 1.0), (False, -1.0)):
-            delta = _cover(radial, s, *p, big_r, big_h, *d1, *d2)
+            delta = _cover(radial, s, *p, big_r, big_h, *d1, *d2, *(d1 + d2))
             if not delta > 0.0:
                 continue
             covered[radial] += 1

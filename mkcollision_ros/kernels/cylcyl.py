@@ -158,14 +158,16 @@ def _rim_nearest_axis(cx, cy, cz, ux, uy, uz, vx, vy, vz, rho):
 
 
 @njit_inline
-def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z):
+def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z, d3x, d3y,
+           d3z):
     """A lower bound on the core depth where a point p of one cylinder (the other's
     frame: radius R, half-height H) lies deep under the other's side (``radial``) or
     under its cap s z = H (not ``radial``), but its ball is cut short by the other's
     cap or side: delta, p's gap to that side or cap (R - |p_xy|, or H - s p_z), or 0
     when the cover below is not found.  The segments p + l d (0 <= l <= 1) for d = d1,
-    d2 and d1 + d2 must lie in p's cylinder (from a rim point: its side line, the
-    diameter of its cap and the diagonal).
+    d2 and d3 must lie in p's shape (from a cylinder's rim point: its side line, the
+    diameter of its cap and the diagonal, d3 = d1 + d2; from a hull's point: to
+    vertices).
 
     Why: the depth is at least delta when every translate A + t with |t| < delta still
     meets B (the ball of radius delta about the origin then lies in B - A).  Under the
@@ -188,7 +190,9 @@ def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z):
     more of the 939 deep pairs certified, 558 -> 615 (49 under a side, 8 under a cap).
     With points sampled densely over the whole cylinder instead of the three segments,
     66 of the 91 deep rim-side minima with the ball cut short by a cap would be covered
-    (the segments: 52).  Left uncertified: 111 deep rim-side minima whose rim point lies
+    (the segments: 52).  Against a hull (hull_cylinder_depth): 183 -> 240 of the 953
+    deep cylinder-convex pairs (each of the hull's vertices as a segment of its own
+    would reach 260).  Left uncertified: 111 deep rim-side minima whose rim point lies
     past the other's axis (delta would be R + |p_xy|, beyond any point's R - |x_xy|;
     covering those needs the direction of t_xy, not only its length), 109 cap minima
     (80 of them deeper than H) and 42 rim-side ones, 32 crossings and 30 others."""
@@ -210,9 +214,9 @@ def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z):
         lim = (big_r if radial else big_h) - math.sqrt(max(0.0, room))
         top = cur
         for j in range(3):
-            dx = d1x if j == 0 else (d2x if j == 1 else d1x + d2x)
-            dy = d1y if j == 0 else (d2y if j == 1 else d1y + d2y)
-            dz = d1z if j == 0 else (d2z if j == 1 else d1z + d2z)
+            dx = d1x if j == 0 else (d2x if j == 1 else d3x)
+            dy = d1y if j == 0 else (d2y if j == 1 else d3y)
+            dz = d1z if j == 0 else (d2z if j == 1 else d3z)
             a = dx * dx + dy * dy
             b = px * dx + py * dy
             if radial:
@@ -432,9 +436,10 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
                 if not ball >= h - tol:
                     # cut short by the side: the cover's bound (_cover) from the rim's
                     # side line, cap diameter and diagonal
-                    ball = _cover(False, s, px, py, pz, big_r, big_h, -2.0 * zk * kx,
-                                  -2.0 * zk * ky, -2.0 * zk * kz, 2.0 * s * ex,
-                                  2.0 * s * ey, 2.0 * s * ez)
+                    fx, fy, fz = -2.0 * zk * kx, -2.0 * zk * ky, -2.0 * zk * kz
+                    gx, gy, gz = 2.0 * s * ex, 2.0 * s * ey, 2.0 * s * ez
+                    ball = _cover(False, s, px, py, pz, big_r, big_h, fx, fy, fz, gx, gy,
+                                  gz, fx + gx, fy + gy, fz + gz)
                 if ball >= h - tol:
                     best_h = h
                     cap_side, cap_s = side, s
@@ -515,7 +520,7 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
         ey = 2.0 * (cy + rim_s * eta * ky - rpy)
         ez = 2.0 * (cz + rim_s * eta * kz - rpz)
         if not _cover(True, 0.0, rpx, rpy, rpz, oth[0], oth[1], f * kx, f * ky, f * kz,
-                      ex, ey, ez) >= h - tol:
+                      ex, ey, ez, f * kx + ex, f * ky + ey, f * kz + ez) >= h - tol:
             return 0.0
     _certified_out(res, h, nx, ny, nz, rim_side, r_ab, t_ab, rpx, rpy, rpz)
     return h
@@ -836,8 +841,11 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     a plane proves the cores apart (as cylinders_depth); 0 (res untouched) when
     neither.  The hull's points are its vertices (verts, body frame) and their convex
     combinations; the candidates are hull points in the cylinder's frame:
-      - for each cap, the hull's lowest vertex under the cap's plane: h along the cap's
-        normal is its gap to the plane, exactly, and a gap <= 0 proves the cores apart;
+      - for each cap, the hull's lowest vertex p under the cap's plane: h along the
+        cap's normal is its gap to the plane, exactly, and a gap <= 0 proves the cores
+        apart; p's ball certifies h, or where the side cuts it short, _cover's bound
+        from the segments p to the vertex nearest the axis, to the highest vertex and
+        to their midpoint;
       - against the side, q = the hull's point nearest the cylinder's axis, i.e. the
         point of the hull's shadow on the plane square to the axis nearest the axis's
         foot: GJK in two dimensions over the shadow (its support is the hull's along a
@@ -845,9 +853,10 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
         segment, whose two vertices are hull points, so q lifts to a hull point).  At
         its end, the support pass along -m (m = q_xy / |q_xy|) gives h along the side
         normal at q, R - min over the hull of m . x, and q's ball certifies it where the
-        caps leave the ball whole; a pass whose minimum lies beyond R proves the cores
-        apart.  The shadow holding the axis's foot (a triangle of the simplex around it)
-        leaves no side candidate.
+        caps leave the ball whole, else _cover's bound from the segments q to the
+        hull's lowest and highest vertices and to the last support point; a pass whose
+        minimum lies beyond R proves the cores apart.  The shadow holding the axis's
+        foot (a triangle of the simplex around it) leaves no side candidate.
     Nothing depends on the 2-D GJK's converging: any hull point's ball is a lower bound
     and any support pass an upper one; only their meeting within EPA_REL_TOL * scale
     certifies.  The side is what a hull's corner or edge pressed into a cylinder takes;
@@ -858,7 +867,8 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     cores overlap by more than 1e-3 * scale certified (170 by the side, 13 by a cap;
     and 17 overlapping less), depths within 9.3e-9 * scale of EPA's (its nearest face),
     normals within 2.2e-4 rad; 856 of the 2,000 proved apart, 457 of them pairs whose
-    bounding spheres overlap (those the batch kernel hands to GJK)."""
+    bounding spheres overlap (those the batch kernel hands to GJK).  With _cover
+    (session 38, pure Python on the same cases): 240 of the 953."""
     side = 0 if sa[0] != CYLINDER else 1
     hull = sa if side == 0 else sb
     cyl = sb[1] if side == 0 else sa[1]
@@ -888,6 +898,18 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
         d = _cap_test(res, side, r_ab, t_ab, s, big_r, big_h, tol, px, py, pz)
         if d != 0.0:
             return d
+        # its ball cut short by the side: the cover (_cover) from p to the vertex
+        # nearest the axis, to the highest (along -s z) and to their midpoint
+        ax, ay, az = _hull_point(pts, inear, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+        tx, ty, tz = _hull_point(pts, ihi if s > 0.0 else ilo, cx, cy, cz, ux, uy, uz, vx,
+                                 vy, vz, kx, ky, kz)
+        h = big_h - s * pz
+        if _cover(False, s, px, py, pz, big_r, big_h, ax - px, ay - py, az - pz, tx - px,
+                  ty - py, tz - pz, 0.5 * (ax + tx) - px, 0.5 * (ay + ty) - py,
+                  0.5 * (az + tz) - pz) >= h - tol:
+            nx, ny, nz = _cap_normal(side, r_ab, s)
+            _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, px, py, pz)
+            return h
     # the side: GJK on the shadow, the simplex [a, b] (b used when two), q on it
     ax, ay, az = _hull_point(pts, inear, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
     bx = by = bz = 0.0
@@ -918,6 +940,15 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
             # q's support plane: q is the shadow's nearest point; h = R - g along m
             h = big_r - g
             ball = cylinder_inradius(big_r, big_h, qx, qy, qz)
+            if not (ball > 0.0 and ball >= h - tol):
+                # cut short by a cap: the cover (_cover) from q to the hull's lowest
+                # and highest vertices and to w
+                lx, ly, lz = _hull_point(pts, ilo, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx,
+                                         ky, kz)
+                tx, ty, tz = _hull_point(pts, ihi, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx,
+                                         ky, kz)
+                ball = _cover(True, 0.0, qx, qy, qz, big_r, big_h, lx - qx, ly - qy,
+                              lz - qz, tx - qx, ty - qy, tz - qz, wx - qx, wy - qy, wz - qz)
             if not (ball > 0.0 and ball >= h - tol):
                 return 0.0
             nx, ny, nz = _side_normal(side, r_ab, qx / q, qy / q)

@@ -35,10 +35,12 @@ direction is theirs:
      h over every direction instead (no ball: the concavity of h in the axes' plane).
 Two sides (A in B, B in A) give eight candidates of kinds 1 and 2.  A cap candidate
 with h <= 0 proves the cores apart (the cylinder lies past the other's cap plane), and
-so does the crossing with h <= 0 (the plane between the two side segments): minus that
-gap at once, with the plane's normal and a point of each core (_apart_out), which
-gjk_epa.gjk_epa_ws takes as GJK's distance bound in contacts mode.  The caps first,
-then the crossing, then the rims (the only kind that needs a support of A - B).  The
+so does the crossing with h <= 0 (the plane between the two side segments), and so
+does a side's tangent plane facing the other's centre with the other core wholly
+beyond it (_sides_apart): minus that gap at once, with the plane's normal and a point
+of each core (_apart_out), which gjk_epa.gjk_epa_ws takes as GJK's distance bound in
+contacts mode.  The caps first, then the crossing, then the sides' planes, then the
+rims (the only kind that needs a support of A - B).  The
 rims are solved in the order of an upper bound on their balls, at most CC_RIMS of
 them, and only the deepest rim point found is tried (one support of A - B): every ball
 is at most the depth, so only the deepest can be certified.
@@ -387,6 +389,40 @@ def _frame(side, r_ab, t_ab):
             r_ab[0, 1], r_ab[1, 1], r_ab[2, 1], r_ab[0, 2], r_ab[1, 2], r_ab[2, 2])
 
 
+@njit_inline
+def _sides_apart(sa, sb, r_ab, t_ab, res):
+    """4. Each cylinder's side against the other core: m the horizontal unit from its
+    axis towards the other's centre (its frame), the other core's lowest point p along
+    m (a rim point, or a cap's centre's edge when the axes are parallel); m . p > R
+    proves the cores apart by that much beyond the side's tangent plane (_past_side).
+    Returns minus the gap (res written as _apart_out's), or 0.  Measured (pure Python,
+    bench/deep_pairs.py's 2,000 cylinder-cylinder cases): of the 536 pairs apart
+    whose bounding spheres overlap (those the batch kernel hands to gjk_epa_ws), the
+    caps' and the crossing's planes decide 283, these 183 more; the other 70 go to
+    GJK."""
+    for side in range(2):
+        own = sa[1] if side == 0 else sb[1]
+        oth = sb[1] if side == 0 else sa[1]
+        rho, eta, big_r, big_h = own[0], own[1], oth[0], oth[1]
+        cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(side, r_ab, t_ab)
+        cc = math.sqrt(cx * cx + cy * cy)
+        if not cc > big_r:
+            continue
+        mx, my = cx / cc, cy / cc
+        mk = mx * kx + my * ky
+        zk = eta if mk >= 0.0 else -eta
+        px, py, pz = cx - zk * kx, cy - zk * ky, cz - zk * kz
+        rx, ry, rz = mx - mk * kx, my - mk * ky, -mk * kz
+        rn = math.sqrt(rx * rx + ry * ry + rz * rz)
+        if rn > 0.0:
+            f = rho / rn
+            px, py, pz = px - f * rx, py - f * ry, pz - f * rz
+        g = mx * px + my * py
+        if g > big_r:
+            return _past_side(res, g, side, r_ab, t_ab, mx, my, big_r, big_h, px, py, pz)
+    return 0.0
+
+
 @njit_kernel
 def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of two cylinders, certified as in the module notes, with
@@ -462,6 +498,9 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     h = _crossing_depth(sa, sb, r_ab, t_ab, tol, res)
     if h != 0.0:
         return h        # certified, or the cores apart across the crossing's plane
+    h = _sides_apart(sa, sb, r_ab, t_ab, res)
+    if h != 0.0:
+        return h        # the cores apart beyond a side's tangent plane
     # the rims, deepest bound first, while a bound exceeds the deepest ball found
     rim_d = 0.0
     rim_side = -1

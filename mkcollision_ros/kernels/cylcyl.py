@@ -376,6 +376,15 @@ def _crossing_depth(sa, sb, r_ab, t_ab, tol, res):
 
 
 @njit_inline
+def _roles(sa, sb, side):
+    """(rho, eta, R, H): the radius and half-height of the cylinder on ``side`` (A's
+    when 0), then the other's."""
+    own = sa[1] if side == 0 else sb[1]
+    oth = sb[1] if side == 0 else sa[1]
+    return own[0], own[1], oth[0], oth[1]
+
+
+@njit_inline
 def _frame(side, r_ab, t_ab):
     """The centre c and axes u, v, k (twelve floats) of the cylinder on ``side`` in the
     other's frame: A's in B's (side 0) or B's in A's (side 1)."""
@@ -401,9 +410,7 @@ def _sides_apart(sa, sb, r_ab, t_ab, res):
     caps' and the crossing's planes decide 283, these 183 more; the other 70 go to
     GJK."""
     for side in range(2):
-        own = sa[1] if side == 0 else sb[1]
-        oth = sb[1] if side == 0 else sa[1]
-        rho, eta, big_r, big_h = own[0], own[1], oth[0], oth[1]
+        rho, eta, big_r, big_h = _roles(sa, sb, side)
         cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(side, r_ab, t_ab)
         cc = math.sqrt(cx * cx + cy * cy)
         if not cc > big_r:
@@ -446,9 +453,7 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     # the rims' upper bounds (index 2 side + (s + 1) / 2), -inf when out of reach
     ub0 = ub1 = ub2 = ub3 = -math.inf
     for side in range(2):
-        own = sa[1] if side == 0 else sb[1]
-        oth = sb[1] if side == 0 else sa[1]
-        rho, eta, big_r, big_h = own[0], own[1], oth[0], oth[1]
+        rho, eta, big_r, big_h = _roles(sa, sb, side)
         cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(side, r_ab, t_ab)
         # the rim's point of greatest z: rho (uz u + vz v) / w, w = sin(angle of axes)
         w = math.sqrt(uz * uz + vz * vz)
@@ -527,9 +532,7 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
             ub3 = -math.inf
         side = i // 2
         s = 2.0 * (i % 2) - 1.0
-        own = sa[1] if side == 0 else sb[1]
-        oth = sb[1] if side == 0 else sa[1]
-        rho, eta, big_r, big_h = own[0], own[1], oth[0], oth[1]
+        rho, eta, big_r, big_h = _roles(sa, sb, side)
         cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(side, r_ab, t_ab)
         px, py, pz = _rim_nearest_axis(cx + s * eta * kx, cy + s * eta * ky,
                                        cz + s * eta * kz, ux, uy, uz, vx, vy, vz, rho)
@@ -550,15 +553,13 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     if not rim_d >= h - tol:
         # the ball cut short by a cap: the cover's bound (_cover), from the rim's
         # side line, cap diameter and diagonal
-        own = sa[1] if rim_side == 0 else sb[1]
-        oth = sb[1] if rim_side == 0 else sa[1]
-        eta = own[1]
+        _, eta, big_r, big_h = _roles(sa, sb, rim_side)
         cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(rim_side, r_ab, t_ab)
         f = -2.0 * rim_s * eta
         ex = 2.0 * (cx + rim_s * eta * kx - rpx)
         ey = 2.0 * (cy + rim_s * eta * ky - rpy)
         ez = 2.0 * (cz + rim_s * eta * kz - rpz)
-        if not _cover(True, 0.0, rpx, rpy, rpz, oth[0], oth[1], f * kx, f * ky, f * kz,
+        if not _cover(True, 0.0, rpx, rpy, rpz, big_r, big_h, f * kx, f * ky, f * kz,
                       ex, ey, ez, f * kx + ex, f * ky + ey, f * kz + ez) >= h - tol:
             return 0.0
     _certified_out(res, h, nx, ny, nz, rim_side, r_ab, t_ab, rpx, rpy, rpz)

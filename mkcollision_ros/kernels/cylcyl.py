@@ -84,7 +84,7 @@ _CC_HALF_TAN_DONE = 5e-5  # a step this short ends the search (1e-4 rad; the ang
                           # error is then of its square, and the ball's of its square)
 CC_RIMS = 2             # rims solved at most, deepest bound first (measured on the
                         # benchmark's cases: 1 certifies 7% fewer pairs, 3 or 4 no more)
-CC_COVER_STEPS = 12     # steps of _rim_cover at most (measured: see its docstring)
+CC_COVER_STEPS = 12     # greedy steps of _cover at most (each raises the level covered)
 CC_CROSS_RINGS = 16      # rings of _crossing_global at most (measured: 8 certify 14
                          # fewer of 965 crossings, 30 two more)
 HC_GJK_ITERS = 16       # steps of the 2-D GJK on a hull's shadow (~4 taken)
@@ -162,12 +162,13 @@ def _rim_nearest_axis(cx, cy, cz, ux, uy, uz, vx, vy, vz, rho):
 @njit_inline
 def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z, d3x, d3y,
            d3z):
-    """A lower bound on the core depth where a point p of one cylinder (the other's
-    frame: radius R, half-height H) lies deep under the other's side (``radial``) or
-    under its cap s z = H (not ``radial``), but its ball is cut short by the other's
-    cap or side: delta, p's gap to that side or cap (R - |p_xy|, or H - s p_z), or 0
-    when the cover below is not found.  The segments p + l d (0 <= l <= 1) for d = d1,
-    d2 and d3 must lie in p's shape (from a cylinder's rim point: its side line, the
+    """A lower bound on the core depth where a point p of one core (a cylinder's or a
+    hull's; the other cylinder's frame: radius R, half-height H) lies deep under the
+    other's side (``radial``) or under its cap s z = H (not ``radial``), but its ball
+    is cut short by the other's cap or side: delta, p's gap to that side or cap (R -
+    |p_xy|, or H - s p_z), or 0 when the cover below is not found (s: the cap's sign;
+    under the side p's nearer cap is taken instead).  The segments p + l d (0 <= l <=
+    1) for d = d1, d2 and d3 must lie in p's core (from a cylinder's rim point: its side line, the
     diameter of its cap and the diagonal, d3 = d1 + d2; from a hull's point: to
     vertices).
 
@@ -176,7 +177,7 @@ def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z, d3
     side, say p's nearer cap is at s z = H, eta = H - s p_z < delta and 2 H >= eta +
     delta.  A t with s t_z < eta keeps p + t in B (|p_xy + t_xy| < |p_xy| + delta = R).
     A t with s t_z = u in [eta, delta) has |t_xy| < sqrt(delta^2 - u^2), so a point x of
-    p's cylinder with |x_xy| <= R - sqrt(delta^2 - u^2) and -H <= s x_z <= H - u has x
+    p's core with |x_xy| <= R - sqrt(delta^2 - u^2) and -H <= s x_z <= H - u has x
     + t in B: x covers the levels u from sqrt(delta^2 - (R - |x_xy|)^2) to H - s x_z.
     Under the cap, the roles of the axis and the radius swap: eta = R - |p_xy| < delta
     <= H; a t with |t_xy| < eta keeps p + t in B, and x covers the levels u = |t_xy|
@@ -402,7 +403,7 @@ def _frame(side, r_ab, t_ab):
 def _sides_apart(sa, sb, r_ab, t_ab, res):
     """4. Each cylinder's side against the other core: m the horizontal unit from its
     axis towards the other's centre (its frame), the other core's lowest point p along
-    m (a rim point, or a cap's centre's edge when the axes are parallel); m . p > R
+    m (a rim point; with the axes parallel, the side line's lower end); m . p > R
     proves the cores apart by that much beyond the side's tangent plane (_past_side).
     Returns minus the gap (res written as _apart_out's), or 0.  Measured (pure Python,
     bench/deep_pairs.py's 2,000 cylinder-cylinder cases): of the 536 pairs apart

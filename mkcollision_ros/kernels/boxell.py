@@ -156,18 +156,12 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     cs, sn = sj * math.sqrt(0.5), sk * math.sqrt(0.5)
     if on > 0.0:
         cs, sn = ox / on, oy / on
+    far = False
     for _ in range(CC_NEWTON_ITERS):
         rs, ncs, nsn, done = gap_newton_step(al, be, ga, ox, oy, cs, sn)
         if sj * cs >= 0.0 and sk * sn >= 0.0 and ox * cs + oy * sn - rs + roll > stop:
-            # apart by more than the caller asks to know: that plane's gap is the bound
-            m = [0.0, 0.0, 0.0]
-            m[j], m[k] = cs, sn
-            px, py, pz, rs = _core_point(c, S, roll, m[0], m[1], m[2])
-            q = [px, py, pz]
-            q[i] = min(box[i], max(-box[i], q[i]))
-            q[j], q[k] = sj * box[j], sk * box[k]
-            return (3, ox * cs + oy * sn - rs + roll, m[0], m[1], m[2], px, py, pz, q[0],
-                    q[1], q[2])
+            far = True      # apart by more than the caller asks to know
+            break
         cs, sn = ncs, nsn
         if done:
             break
@@ -178,6 +172,10 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     pt = [px, py, pz]
     q = [px, py, pz]
     q[j], q[k] = sj * box[j], sk * box[k]
+    if far:
+        # that plane's gap is the bound, q the edge's point nearest p
+        q[i] = min(box[i], max(-box[i], q[i]))
+        return 3, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
     if not (sj * cs >= 0.0 and sk * sn >= 0.0 and g > 0.0):
         return 0, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
     if pt[i] > box[i]:
@@ -259,6 +257,21 @@ def _face_normal(side, r_ab, k, s):
     return (s if k == 0 else 0.0), (s if k == 1 else 0.0), (s if k == 2 else 0.0)
 
 
+@njit_inline
+def _edge_out(res, side, r_ab, t_ab, st, g, mx, my, mz, ax, ay, az, bx, by, bz):
+    """_beyond_rim's answer from an edge (_edge_distance's outputs): (-g, True) for the
+    exact distance (status 1, _exact_apart), (-g, False) for its plane's bound (status
+    3, _apart_out), else (0, False)."""
+    if st == 1:
+        return _exact_apart(res, side, r_ab, t_ab, g, mx, my, mz, ax, ay, az, bx, by,
+                            bz), True
+    if st == 3:
+        nx, ny, nz = _normal_of(side, r_ab, mx, my, mz)
+        return _apart_out(res, g, nx, ny, nz, side, r_ab, t_ab, ax, ay, az, bx, by,
+                          bz), False
+    return 0.0, False
+
+
 @njit_kernel
 def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, vx, vy, vz,
                 kx, ky, kz, k, s, px, py, pz, scale, stop):
@@ -293,15 +306,9 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
         i = i2 if out1 else i1          # the edge's axis
         st, g, mx, my, mz, ax, ay, az, bx, by, bz = _edge_distance(
             c, S, roll, box, i, j, k, sg[j], s, scale, stop)
-        if st == 1:
-            return _exact_apart(res, side, r_ab, t_ab, g, mx, my, mz, ax, ay, az, bx, by,
-                                bz), True
-        if st == 3:
-            nx, ny, nz = _normal_of(side, r_ab, mx, my, mz)
-            return _apart_out(res, g, nx, ny, nz, side, r_ab, t_ab, ax, ay, az, bx, by,
-                              bz), False
-        if st == 0:
-            return 0.0, False
+        if st != 2 and st != -1:
+            return _edge_out(res, side, r_ab, t_ab, st, g, mx, my, mz, ax, ay, az, bx, by,
+                             bz)
         sg[i] = 1.0 if st == 2 else -1.0
     ok, g, mx, my, mz, ax, ay, az, bx, by, bz = _vertex_distance(
         c, S, roll, ell, (ux, uy, uz, vx, vy, vz, kx, ky, kz), box, sg[0], sg[1], sg[2],
@@ -316,13 +323,9 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
             j = i2 if e == 0 else i1
             st, g, mx, my, mz, ax, ay, az, bx, by, bz = _edge_distance(
                 c, S, roll, box, i, j, k, sg[j], s, scale, stop)
-            if st == 1:
-                return _exact_apart(res, side, r_ab, t_ab, g, mx, my, mz, ax, ay, az, bx,
-                                    by, bz), True
-            if st == 3:
-                nx, ny, nz = _normal_of(side, r_ab, mx, my, mz)
-                return _apart_out(res, g, nx, ny, nz, side, r_ab, t_ab, ax, ay, az, bx,
-                                  by, bz), False
+            if st == 1 or st == 3:
+                return _edge_out(res, side, r_ab, t_ab, st, g, mx, my, mz, ax, ay, az, bx,
+                                 by, bz)
     return 0.0, False
 
 

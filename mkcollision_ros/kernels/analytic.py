@@ -58,9 +58,9 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, 
                         P_MARGIN, OUT_DIST, OUT_ITERS, OUT_METHOD,
                         OUT_NORMAL, OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN,
                         ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
-from .geometry import (inflation, meet, quat_entries, quat_rotate_xyz, shape_scale,
-                       support_full_xyz)
-from .jit import njit_inline, njit_kernel
+from .geometry import (borrow_args, borrow_pose, inflation, meet, quat_entries,
+                       quat_rotate_xyz, shape_scale, support_full_xyz)
+from .jit import borrow, njit_inline, njit_kernel
 
 
 @njit_kernel
@@ -827,6 +827,9 @@ def box_box_sat(sa, sb, r_ab, t_ab, out):
     axis as normal, A's support point along it as pa and pb = pa + bound * normal), which
     the dispatcher may keep for a pair farther than its distance cutoff.
     """
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    out = borrow(out)
     a = sa[1]
     b = sb[1]
     ra = inflation(sa[0], a)
@@ -1048,6 +1051,9 @@ def collide_analytic(sa, sb, verts, r_ab, t_ab, out):
     Returns the status code under the touching rule (scale = sum of bounding radii).
     Either order of a supported pair is accepted.
     """
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    out = borrow(out)
     if sa[0] <= sb[0]:
         ran, dist = _ordered(sa, sb, verts, r_ab, t_ab, out)
         if not ran:

@@ -87,8 +87,8 @@ axis-aligned scenes keep EPA's handling of face-to-face contacts.
 import math
 
 from .constants import BOX, EPA_REL_TOL
-from .geometry import meet
-from .jit import njit_inline, njit_kernel
+from .geometry import borrow_pose, meet
+from .jit import borrow, njit_inline, njit_kernel
 
 BC_MAX_LEVEL = 4        # halvings of an arc whose bound is too low (then EPA)
 _BC_FEAT = 1e-9         # a box axis this close to normal to m: m is on its edge circle
@@ -438,6 +438,9 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
     ...] (_apart_out) and returns -gap, which gjk_epa.gjk_epa_ws takes as GJK's
     distance bound in contacts mode (as cylcyl's planes).  Returns 0, res untouched,
     when the answer is neither certified nor apart."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    scratch, res = borrow(scratch), borrow(res)
     box_a = sa[0] == BOX
     pbox = sa[1] if box_a else sb[1]
     pcyl = sb[1] if box_a else sa[1]

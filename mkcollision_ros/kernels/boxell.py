@@ -64,8 +64,8 @@ import numpy as np
 
 from .constants import ELLIPSOID, EPA_REL_TOL, P_ROLL
 from .cylcyl import CC_NEWTON_ITERS, _apart_out, _certified_out, _frame, gap_newton_step
-from .geometry import meet
-from .jit import njit_inline, njit_kernel
+from .geometry import borrow_pose, meet
+from .jit import borrow, njit_inline, njit_kernel
 
 
 BE_POINT_ITERS = 40     # Newton steps on the Lagrange multiplier of a box vertex's nearest
@@ -284,6 +284,9 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
     Returns (-g, True) for the exact distance g (res written, _exact_apart), (-g, False)
     for an edge's separating plane whose gap g exceeds ``stop`` (_apart_out), or (0,
     False) when neither is certain."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    res, r_ab, t_ab = borrow(res), borrow(r_ab), borrow(t_ab)
+    ell, box = borrow(ell), borrow(box)
     a2, b2, c2 = ell[0] * ell[0], ell[1] * ell[1], ell[2] * ell[2]
     S = (a2 * ux * ux + b2 * vx * vx + c2 * kx * kx,
          a2 * ux * uy + b2 * vx * vy + c2 * kx * ky,
@@ -343,6 +346,9 @@ def ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, stop, res):
     * (-g < 0, False): the cores are at least g apart, n normal to a separating plane,
       pa and pb points of the two cores (cylcyl._apart_out).
     * (0, False): nothing decided, res untouched."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    res = borrow(res)
     side = 0 if sa[0] == ELLIPSOID else 1
     ell = sa[1] if side == 0 else sb[1]
     box = sb[1] if side == 0 else sa[1]

@@ -74,8 +74,8 @@ other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
 import math
 
 from .constants import CYLINDER, EPA_REL_TOL, P_ROLL
-from .geometry import cylinder_inradius, minkowski_core_xyz
-from .jit import njit_inline, njit_kernel
+from .geometry import borrow_args, borrow_pose, cylinder_inradius, minkowski_core_xyz
+from .jit import borrow, njit_inline, njit_kernel
 
 CC_NEWTON_ITERS = 8     # Newton steps on a rim's angle (~4 taken on average)
 _CC_HALF_TAN_MAX = 0.25  # longest step: tan of half its angle (~0.49 rad); far from the
@@ -446,6 +446,9 @@ def cylinders_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     deepest ball found: only the deepest rim point can be certified (every ball is at
     most the depth, and a certified one is within tol of it), and one support of A - B
     along its normal decides."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    res = borrow(res)
     tol = EPA_REL_TOL * scale
     best_h = math.inf
     cap_side = -1
@@ -594,6 +597,9 @@ def segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     cores overlap by more than 1e-3 * scale certified (275 by the side, 39 by a cap),
     depths within 4.4e-9 * scale of EPA's, normals within 8.0e-5 rad; the others are
     pushed out over a rim (no ball as deep as the depth fits in the cylinder there)."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    res = borrow(res)
     side = 0 if sa[0] != CYLINDER else 1
     seg = sa[1] if side == 0 else sb[1]
     cyl = sb[1] if side == 0 else sa[1]
@@ -695,6 +701,9 @@ def ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     scale of EPA's, normals within 1e-6 rad, and 527 of the 2,000 proved apart by a
     cap; every pair the reference has penetrating less deeply, or apart, is left to
     GJK."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    res = borrow(res)
     side = 0 if sa[0] != CYLINDER else 1
     ell = sa[1] if side == 0 else sb[1]
     cyl = sb[1] if side == 0 else sa[1]
@@ -910,6 +919,9 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     normals within 2.2e-4 rad; 856 of the 2,000 proved apart, 457 of them pairs whose
     bounding spheres overlap (those the batch kernel hands to GJK).  With _cover
     (session 38, pure Python on the same cases): 240 of the 953."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    res = borrow(res)
     side = 0 if sa[0] != CYLINDER else 1
     hull = sa if side == 0 else sb
     cyl = sb[1] if side == 0 else sa[1]

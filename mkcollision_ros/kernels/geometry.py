@@ -299,8 +299,15 @@ def borrow_args(sa, sb, verts, r_ab, t_ab):
     counts numba updates for every view it takes are on null meminfos, which numba's
     reference-count pruning removes at compile time; on the arguments as passed the
     calls stay (unknown meminfo), one or two per view taken."""
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
+    return sa, sb, borrow(verts), r_ab, t_ab
+
+
+@njit_inline
+def borrow_pose(sa, sb, r_ab, t_ab):
+    """borrow_args for a kernel that takes no hull vertices."""
     return ((sa[0], borrow(sa[1]), sa[2], sa[3]), (sb[0], borrow(sb[1]), sb[2], sb[3]),
-            borrow(verts), borrow(r_ab), borrow(t_ab))
+            borrow(r_ab), borrow(t_ab))
 
 
 @njit_inline

@@ -194,7 +194,8 @@ from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
 from .boxell import ellipsoid_box_depth, face_room
 from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
                      segment_cylinder_depth, sides_crossing)
-from .geometry import borrow_args, inflation, meet, minkowski_core_xyz, shape_scale
+from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core_xyz,
+                       shape_scale)
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -1907,6 +1908,7 @@ def _ball_certified(sa, sb, r_ab, t_ab, hmin, nx, ny, nz, ax, ay, az, bx, by, bz
     of 961 ellipsoid-box pairs where the ball of radius P_ROLL alone (the core's
     point) does 502, 708 of 992 ellipsoid-cylinder (598), 847 of 988
     ellipsoid-ellipsoid."""
+    sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
     if _core_inradius(0, sa, sb, r_ab, t_ab, bx, by, bz) >= hmin:
         return True
     if _core_inradius(1, sa, sb, r_ab, t_ab, ax, ay, az) >= hmin:
@@ -2185,6 +2187,8 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
     written into it, deep pairs of rows that never take the branch took 4-7% more
     time (capsule-cylinder, cylinder-cylinder, cylinder-convex, box-cylinder,
     sphere-convex; bench/ab_deep.py, identical results)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws = borrow_gjk_workspace(ws)
     side = _hull_side(sa[0], sb[0])
     if side < 0:
         return _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns,

@@ -63,7 +63,7 @@ def object_code(cache_dir):
     """The ELF object of _collide_block's cache entry (bytes)."""
     files = glob.glob(os.path.join(cache_dir, "narrowphase._collide_block-*.nbc"))
     if not files:
-        sys.exit(f"no cached _collide_block in {cache_dir}")
+        sys.exit(f"no cached _collide_block in {cache_dir}: run the row once first")
     raw = open(max(files, key=os.path.getmtime), "rb").read()
     elf = raw[raw.find(b"\x7fELF"):]
     shoff = struct.unpack_from("<Q", elf, 0x28)[0]
@@ -171,11 +171,13 @@ def main():
 
 
 def _cache_folder(cache_dir):
-    """The kernels' folder inside numba's cache folder (jit._kernel_cache_dir)."""
-    found = glob.glob(os.path.join(cache_dir, "kernels_*"))
-    if not found:
-        sys.exit(f"nothing cached in {cache_dir}: run the row once first")
-    return max(found, key=os.path.getmtime)
+    """This checkout's kernels' folder inside numba's cache folder (jit._kernel_cache_dir):
+    numba names it after the source folder and a hash of its path (its
+    _CacheLocator.get_suitable_cache_subpath)."""
+    from numba.core.caching import _CacheLocator
+    from mkcollision_ros.kernels import narrowphase
+    return os.path.join(cache_dir,
+                        _CacheLocator.get_suitable_cache_subpath(narrowphase.__file__))
 
 
 if __name__ == "__main__":

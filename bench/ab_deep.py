@@ -15,6 +15,8 @@ borrowed arrays, one workspace, ``--cutoff`` 0 as in contacts mode).
     ... --check-n 100000            # also results only on that many other cases per
                                     # row (seed + 1), in the same process: one compile
     ... --cutoff inf                # exact distances: the pairs apart compare too
+    ... --keep /tmp/ab_rev          # keep the exported revision and its numba cache:
+                                    # the next run against it compiles only ours
 
 Cases: bench.common.pair_cases(a, b, n, seed) with ``--seed``.  "deep" pairs are those
 deeper than 1e-3 * scale by the revision's result, "apart" those it finds apart whose
@@ -35,6 +37,7 @@ import importlib
 import os
 import subprocess
 import sys
+import shutil
 import tempfile
 import time
 
@@ -51,14 +54,25 @@ from mkcollision_ros.kernels.jit import borrow  # noqa: E402
 
 
 def import_revision(rev, folder):
-    """REV's kernels as the package ``mkc_ab_rev.kernels`` (exported into folder)."""
+    """REV's kernels as the package ``mkc_ab_rev.kernels`` (exported into folder, or
+    reused from there when an earlier run exported the same commit: numba's cache files
+    beside them then spare the revision's compile)."""
     pkg = os.path.join(folder, "mkc_ab_rev")
+    sha = subprocess.run(["git", "-C", ROOT, "rev-parse", rev], check=True,
+                         capture_output=True, text=True).stdout.strip()
+    stamp = os.path.join(pkg, "REVISION")
+    if os.path.exists(stamp) and open(stamp).read() == sha:
+        sys.path.insert(0, folder)
+        return importlib.import_module("mkc_ab_rev.kernels.gjk_epa")
+    shutil.rmtree(pkg, ignore_errors=True)
     os.makedirs(pkg)
     tar = subprocess.run(["git", "-C", ROOT, "archive", rev, "mkcollision_ros/kernels"],
                          check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", folder], input=tar, check=True)
     os.rename(os.path.join(folder, "mkcollision_ros", "kernels"), os.path.join(pkg, "kernels"))
     open(os.path.join(pkg, "__init__.py"), "w").close()
+    with open(stamp, "w") as f:
+        f.write(sha)
     sys.path.insert(0, folder)
     return importlib.import_module("mkc_ab_rev.kernels.gjk_epa")
 
@@ -93,10 +107,15 @@ def main():
     ap.add_argument("--no-time", action="store_true")
     ap.add_argument("--check-n", type=int, default=0,
                     help="first compare results on this many cases per row (seed + 1)")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="export the revision into DIR and keep it (and its compiled "
+                         "kernels) for the next run against the same commit")
     args = ap.parse_args()
     numba.set_num_threads(1)
     with tempfile.TemporaryDirectory() as tmp:
-        R = import_revision(args.rev, tmp)
+        if args.keep:
+            os.makedirs(args.keep, exist_ok=True)
+        R = import_revision(args.rev, os.path.abspath(args.keep) if args.keep else tmp)
         runs = {"rev": (make_run(R.gjk_epa_ws), R.make_gjk_workspace()),
                 "ours": (make_run(G.gjk_epa_ws), G.make_gjk_workspace())}
         jobs = [(row, args.check_n, args.seed + 1, False) for row in args.rows
@@ -159,7 +178,8 @@ def main():
                          f"({oo[sel, OUT_ITERS].mean():.1f}), ours/rev {to_ / tr_:.3f} "
                          f"(round ratios "
                          f"{min(np.divide(ts['ours'], ts['rev'])):.3f}-"
-                         f"{max(np.divide(ts['ours'], ts['rev'])):.3f})")
+                         f"{max(np.divide(ts['ours'], ts['rev'])):.3f}; of the "
+                         f"fastest rounds {min(ts['ours']) / min(ts['rev']):.3f})")
             if pen.any() and lower.max() > 1e-8:
                 k = np.flatnonzero(pen)[np.argmax(lower)]
                 ia, ib = 2 * k, 2 * k + 1

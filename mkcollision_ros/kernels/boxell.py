@@ -136,6 +136,14 @@ def _s_at(S, a, b):
 
 
 @njit_inline
+def _axis_pick(axis, x, y, z):
+    """The one of x, y, z for the box axis ``axis`` (0, 1 or 2)."""
+    if axis == 0:
+        return x
+    return y if axis == 1 else z
+
+
+@njit_inline
 def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     """The cores' distance over the box edge along x_i at (x_j, x_k) = (sj e_j, sk e_k),
     the core beyond it: the unit m (box's frame, in the plane of x_j and x_k, between
@@ -165,26 +173,31 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
         cs, sn = ncs, nsn
         if done:
             break
-    m = [0.0, 0.0, 0.0]
-    m[j], m[k] = cs, sn
-    px, py, pz, rs = _core_point(c, S, roll, m[0], m[1], m[2])
+    # m = cs e_j + sn e_k, and q = p with its j and k coordinates on the edge: written
+    # as floats (lists would be allocated and freed at every call)
+    mx = cs if j == 0 else (sn if k == 0 else 0.0)
+    my = cs if j == 1 else (sn if k == 1 else 0.0)
+    mz = cs if j == 2 else (sn if k == 2 else 0.0)
+    px, py, pz, rs = _core_point(c, S, roll, mx, my, mz)
     g = ox * cs + oy * sn - rs + roll
-    pt = [px, py, pz]
-    q = [px, py, pz]
-    q[j], q[k] = sj * box[j], sk * box[k]
+    p_i = _axis_pick(i, px, py, pz)
+    qj, qk = sj * box[j], sk * box[k]
+    # far: that plane's gap is the bound, q the edge's point nearest p
+    qi = min(box[i], max(-box[i], p_i)) if far else p_i
+    qx = qj if j == 0 else (qk if k == 0 else qi)
+    qy = qj if j == 1 else (qk if k == 1 else qi)
+    qz = qj if j == 2 else (qk if k == 2 else qi)
     if far:
-        # that plane's gap is the bound, q the edge's point nearest p
-        q[i] = min(box[i], max(-box[i], q[i]))
-        return 3, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
+        return 3, g, mx, my, mz, px, py, pz, qx, qy, qz
     if not (sj * cs >= 0.0 and sk * sn >= 0.0 and g > 0.0):
-        return 0, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
-    if pt[i] > box[i]:
-        return 2, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
-    if pt[i] < -box[i]:
-        return -1, g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
-    dj, dk = pt[j] - q[j], pt[k] - q[k]
+        return 0, g, mx, my, mz, px, py, pz, qx, qy, qz
+    if p_i > box[i]:
+        return 2, g, mx, my, mz, px, py, pz, qx, qy, qz
+    if p_i < -box[i]:
+        return -1, g, mx, my, mz, px, py, pz, qx, qy, qz
+    dj, dk = _axis_pick(j, px, py, pz) - qj, _axis_pick(k, px, py, pz) - qk
     ok = math.sqrt(dj * dj + dk * dk) - g <= _BE_EXACT * scale
-    return (1 if ok else 0), g, m[0], m[1], m[2], px, py, pz, q[0], q[1], q[2]
+    return (1 if ok else 0), g, mx, my, mz, px, py, pz, qx, qy, qz
 
 
 @njit_inline
@@ -286,7 +299,10 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
     False) when neither is certain."""
     # owner-less views: no reference counting on them (geometry.borrow_args)
     res, r_ab, t_ab = borrow(res), borrow(r_ab), borrow(t_ab)
-    ell, box = borrow(ell), borrow(box)
+    # the radii and the half sides as floats: the arrays, passed on to the helpers
+    # inlined below, kept 13 reference-count calls on their struct even borrowed
+    ell = (ell[0], ell[1], ell[2])
+    box = (box[0], box[1], box[2])
     a2, b2, c2 = ell[0] * ell[0], ell[1] * ell[1], ell[2] * ell[2]
     S = (a2 * ux * ux + b2 * vx * vx + c2 * kx * kx,
          a2 * ux * uy + b2 * vx * vy + c2 * kx * ky,
@@ -301,20 +317,25 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
     i2 = 1 if k == 2 else 2
     out1 = abs(p[i1]) > box[i1]
     out2 = abs(p[i2]) > box[i2]
-    sg = [1.0 if p[0] >= 0.0 else -1.0, 1.0 if p[1] >= 0.0 else -1.0,
-          1.0 if p[2] >= 0.0 else -1.0]
-    sg[k] = s
+    # the signs of p's octant, the face's s along k: three floats, not a list (a list
+    # is allocated and freed at every call)
+    sg0 = s if k == 0 else (1.0 if p[0] >= 0.0 else -1.0)
+    sg1 = s if k == 1 else (1.0 if p[1] >= 0.0 else -1.0)
+    sg2 = s if k == 2 else (1.0 if p[2] >= 0.0 else -1.0)
     if out1 != out2:
         j = i1 if out1 else i2          # the side p lies past
         i = i2 if out1 else i1          # the edge's axis
         st, g, mx, my, mz, ax, ay, az, bx, by, bz = _edge_distance(
-            c, S, roll, box, i, j, k, sg[j], s, scale, stop)
+            c, S, roll, box, i, j, k, _axis_pick(j, sg0, sg1, sg2), s, scale, stop)
         if st != 2 and st != -1:
             return _edge_out(res, side, r_ab, t_ab, st, g, mx, my, mz, ax, ay, az, bx, by,
                              bz)
-        sg[i] = 1.0 if st == 2 else -1.0
+        si = 1.0 if st == 2 else -1.0
+        sg0 = si if i == 0 else sg0
+        sg1 = si if i == 1 else sg1
+        sg2 = si if i == 2 else sg2
     ok, g, mx, my, mz, ax, ay, az, bx, by, bz = _vertex_distance(
-        c, S, roll, ell, (ux, uy, uz, vx, vy, vz, kx, ky, kz), box, sg[0], sg[1], sg[2],
+        c, S, roll, ell, (ux, uy, uz, vx, vy, vz, kx, ky, kz), box, sg0, sg1, sg2,
         scale)
     if ok:
         return _exact_apart(res, side, r_ab, t_ab, g, mx, my, mz, ax, ay, az, bx, by,
@@ -325,7 +346,7 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
             i = i1 if e == 0 else i2
             j = i2 if e == 0 else i1
             st, g, mx, my, mz, ax, ay, az, bx, by, bz = _edge_distance(
-                c, S, roll, box, i, j, k, sg[j], s, scale, stop)
+                c, S, roll, box, i, j, k, _axis_pick(j, sg0, sg1, sg2), s, scale, stop)
             if st == 1 or st == 3:
                 return _edge_out(res, side, r_ab, t_ab, st, g, mx, my, mz, ax, ay, az, bx,
                                  by, bz)

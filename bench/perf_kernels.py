@@ -20,7 +20,6 @@ NRT_decref): a called kernel that does not re-borrow its array arguments
 import argparse
 import bisect
 import collections
-import glob
 import os
 import re
 import struct
@@ -59,11 +58,16 @@ while time.perf_counter() - t0 < float(seconds):
 """
 
 
-def object_code(cache_dir):
-    """The ELF object of _collide_block's cache entry (bytes)."""
-    files = glob.glob(os.path.join(cache_dir, "narrowphase._collide_block-*.nbc"))
-    if not files:
-        sys.exit(f"no cached _collide_block in {cache_dir}: run the row once first")
+def object_code():
+    """The ELF object of _collide_block's cache entry (bytes): the file numba's index
+    for it names (the newest of them if it names several), in this checkout's cache
+    folder (numba names that folder after the source folder and a hash of its path)."""
+    from mkcollision_ros.kernels import narrowphase
+    cache = narrowphase._collide_block._cache
+    names = list(cache._cache_file._load_index().values())
+    if not names:
+        sys.exit(f"no cached _collide_block in {cache._cache_path}: run the row once first")
+    files = [os.path.join(cache._cache_path, name) for name in names]
     raw = open(max(files, key=os.path.getmtime), "rb").read()
     elf = raw[raw.find(b"\x7fELF"):]
     shoff = struct.unpack_from("<Q", elf, 0x28)[0]
@@ -129,8 +133,6 @@ def main():
     ap.add_argument("--calls", action="store_true")
     args = ap.parse_args()
     sys.path.insert(0, ROOT)
-    import numba
-    from mkcollision_ros.kernels import jit  # noqa: F401  (sets numba's cache folder)
     with tempfile.TemporaryDirectory() as tmp:
         anchor, data = os.path.join(tmp, "anchor"), os.path.join(tmp, "perf.data")
         env = dict(os.environ, PYTHONPATH=ROOT, NUMBA_NUM_THREADS="1")
@@ -140,7 +142,7 @@ def main():
         name, addr, n_sel = open(anchor).read().split()
         obj_path = os.path.join(tmp, "kernels.o")
         with open(obj_path, "wb") as f:
-            f.write(object_code(_cache_folder(numba.config.CACHE_DIR)))
+            f.write(object_code())
         ents = functions(obj_path)
         base = int(addr, 16) - next(o for o, _, s in ents if s == name)
         starts = [e[0] for e in ents]
@@ -168,16 +170,6 @@ def main():
     for fn, c in counts.most_common(args.top):
         extra = f" {sites.get(fn, 0)} |" if args.calls else ""
         print(f"| {c / max(jitted, 1):.1%} | {fn} |{extra}")
-
-
-def _cache_folder(cache_dir):
-    """This checkout's kernels' folder inside numba's cache folder (jit._kernel_cache_dir):
-    numba names it after the source folder and a hash of its path (its
-    _CacheLocator.get_suitable_cache_subpath)."""
-    from numba.core.caching import _CacheLocator
-    from mkcollision_ros.kernels import narrowphase
-    return os.path.join(cache_dir,
-                        _CacheLocator.get_suitable_cache_subpath(narrowphase.__file__))
 
 
 if __name__ == "__main__":

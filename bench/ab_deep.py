@@ -35,9 +35,9 @@ see BENCHMARKS.md.
 import argparse
 import importlib
 import os
+import shutil
 import subprocess
 import sys
-import shutil
 import tempfile
 import time
 

@@ -61,18 +61,17 @@ def import_revision(rev, folder):
     sha = subprocess.run(["git", "-C", ROOT, "rev-parse", rev], check=True,
                          capture_output=True, text=True).stdout.strip()
     stamp = os.path.join(pkg, "REVISION")
-    if os.path.exists(stamp) and open(stamp).read() == sha:
-        sys.path.insert(0, folder)
-        return importlib.import_module("mkc_ab_rev.kernels.gjk_epa")
-    shutil.rmtree(pkg, ignore_errors=True)
-    os.makedirs(pkg)
-    tar = subprocess.run(["git", "-C", ROOT, "archive", rev, "mkcollision_ros/kernels"],
-                         check=True, capture_output=True).stdout
-    subprocess.run(["tar", "-x", "-C", folder], input=tar, check=True)
-    os.rename(os.path.join(folder, "mkcollision_ros", "kernels"), os.path.join(pkg, "kernels"))
-    open(os.path.join(pkg, "__init__.py"), "w").close()
-    with open(stamp, "w") as f:
-        f.write(sha)
+    if not (os.path.exists(stamp) and open(stamp).read() == sha):
+        shutil.rmtree(pkg, ignore_errors=True)
+        os.makedirs(pkg)
+        tar = subprocess.run(["git", "-C", ROOT, "archive", rev, "mkcollision_ros/kernels"],
+                             check=True, capture_output=True).stdout
+        subprocess.run(["tar", "-x", "-C", folder], input=tar, check=True)
+        os.rename(os.path.join(folder, "mkcollision_ros", "kernels"),
+                  os.path.join(pkg, "kernels"))
+        open(os.path.join(pkg, "__init__.py"), "w").close()
+        with open(stamp, "w") as f:
+            f.write(sha)
     sys.path.insert(0, folder)
     return importlib.import_module("mkc_ab_rev.kernels.gjk_epa")
 

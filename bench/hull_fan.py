@@ -1,0 +1,433 @@
+"""A prototype, not used by the product: the exact depth of an ellipsoid and a convex hull
+from the hull's normal fan, against GJK/EPA on the same deep pairs (session 41).
+
+Why: deep pairs are 92% of the ellipsoid-convex row's time (bench/regimes.py), and EPA
+needs ~23 supports on them whatever its per-step cost.  The idea, in A's (the
+ellipsoid's) frame: f(n) = h_E(n) + h_B(-n) over unit n, and min f = -signed distance.
+B's normal fan splits the sphere into its faces' normals (points), its edges' arcs and
+its vertices' cones; the minimiser lies inside one of them and is a critical point of f
+restricted to it.  So the candidates are:
+
+  * each face's normal: f there (one square root);
+  * each edge's arc: the 2-D problem of E projected along the edge and the edge's point,
+    whose critical points are the feet of the normals from the point to the ellipse;
+  * each vertex's cone: the 3-D problem of E and the vertex (the same, one dimension up).
+
+Both are roots t of the secular equation sum_i w_i / (l_i + t)^2 = 1 (l_i the squared
+semi-axes, w_i = l_i P_i^2 for the point P in the ellipsoid's axes); a root gives the
+normal N_i = P_i / (l_i + t) and the value -t |N|, kept only if B's support along -n is
+attained at that edge or vertex.  Only the root right of the least pole and the two
+between the two least poles can be local minima (the Hessian of the distance on the
+surface is I + t D^-1 on the tangent plane), so the others are never searched.
+
+Pruning (every bound rigorous; U the best value so far):
+  * an edge: g >= max of its tangent planes at the arc's ends, taken over the chord
+    between the ends (|x| <= 1 there, g homogeneous), a closed form per edge;
+  * a vertex's foot right of the pole: every inside vertex u gives depth >= (1 - rho_u)
+    a_min (the ball about u inside E), and a vertex's own foot is at most (1 - rho)
+    a_max away, so it can be the answer only if that reaches the largest such bound;
+  * the roots between the poles: their value is at least l0 / sqrt(l2) (the rolling
+    radius), and for a vertex outside E at least 2 r_roll + (rho - 1) a_min (the inner
+    normal crosses the rolling ball, then reaches the vertex); a two-term test of the
+    secular equation (the point outside the evolute) shows there are none at all.
+
+It assumes the pair penetrates (outside vertices' negative feet are skipped); a kernel in
+the product would first prove that (a hull vertex inside E, or E's centre inside B) and
+hand anything else, and anything near-degenerate (equal semi-axes, a point on an axis
+plane, a bracket that fails), to GJK/EPA as boxell.py does.
+
+    PYTHONPATH=. .venv/bin/python bench/hull_fan.py [--n 1000]
+
+Prints: decided pairs, the largest depth and normal differences against the saved GJK/EPA
+reference (bench/deep_pairs.py --save ellipsoid-convex makes it), edge and vertex solves
+per pair, the time per pair of the prototype (one thread, numba loop over the pairs),
+and of the batch kernel's GJK/EPA on the same pairs, and of the prototype's parts.
+"""
+import argparse
+import collections
+import itertools
+import math
+import os
+import sys
+import time
+
+import numba
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from bench.common import relative_poses  # noqa: E402
+from bench.deep_pairs import load_cases  # noqa: E402
+from bench.narrowphase import run_ours  # noqa: E402
+from bench.regimes import subset  # noqa: E402
+from mkcollision_ros.kernels.constants import M_GJK_EPA  # noqa: E402
+
+ITERS = 60          # cap of every 1-D root search
+
+
+@numba.njit(cache=False)
+def _phi(l0, l1, l2, w0, w1, w2, t):
+    a, b, c = 1.0 / (l0 + t), 1.0 / (l1 + t), 1.0 / (l2 + t)
+    a2, b2, c2 = w0 * a * a, w1 * b * b, w2 * c * c
+    return (a2 + b2 + c2 - 1.0, -2.0 * (a2 * a + b2 * b + c2 * c),
+            6.0 * (a2 * a * a + b2 * b * b + c2 * c * c))
+
+
+@numba.njit(cache=False)
+def _solve(l0, l1, l2, w0, w1, w2, lo, hi, deriv, t0):
+    """Root of phi (deriv 0) or of phi' (deriv 1) in [lo, hi], where it changes sign,
+    by Newton's method kept in the bracket (bisection when it leaves it)."""
+    f_lo = _phi(l0, l1, l2, w0, w1, w2, lo)[deriv]
+    f_hi = _phi(l0, l1, l2, w0, w1, w2, hi)[deriv]
+    if f_lo == 0.0:
+        return lo, True
+    if f_hi == 0.0:
+        return hi, True
+    if (f_lo > 0.0) == (f_hi > 0.0):
+        return 0.0, False
+    up = f_lo < 0.0           # increasing through the root
+    t = t0 if lo < t0 < hi else 0.5 * (lo + hi)
+    for _ in range(ITERS):
+        r = _phi(l0, l1, l2, w0, w1, w2, t)
+        g, dg = r[deriv], r[deriv + 1]
+        if g == 0.0:
+            return t, True
+        if (g < 0.0) == up:
+            lo = t
+        else:
+            hi = t
+        tn = t - g / dg if dg != 0.0 else 0.5 * (lo + hi)
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= 1e-15 * (abs(t) + 1e-300) or hi - lo <= 4e-16 * abs(hi):
+            return tn, True
+        t = tn
+    return t, False
+
+
+@numba.njit(cache=False)
+def _root_right(l0, l1, l2, w0, w1, w2):
+    """The root of sum w_i / (l_i + t)^2 = 1 right of the pole -l0 (l0 the least):
+    phi is convex and decreasing there, so Newton's method from the left end of the
+    bracket [-l0 + sqrt(w0), ...] climbs to it monotonically."""
+    t = -l0 + math.sqrt(w0)
+    for _ in range(ITERS):
+        r = _phi(l0, l1, l2, w0, w1, w2, t)
+        if not r[0] > 0.0:
+            return t, True
+        tn = t - r[0] / r[1]
+        if not tn > t:
+            return t, True
+        if tn - t <= 1e-15 * (abs(t) + l0):
+            return tn, True
+        t = tn
+    return t, False
+
+
+@numba.njit(cache=False)
+def _roots_mid(l0, l1, l2, w0, w1, w2, out):
+    """The roots of phi between the poles -l1 and -l0 (phi convex, +inf at both):
+    0 or 2, in out[0:2]; returns the count, -1 if a bracket did not hold."""
+    gap = l1 - l0
+    # with the other term dropped phi is no larger: no root if that one has none
+    c0, c1 = w0 ** (1.0 / 3.0), w1 ** (1.0 / 3.0)
+    if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
+        return 0
+    u = gap * c0 / (c0 + c1)
+    a = -l1 + 1e-9 * gap
+    b = -l0 - 1e-9 * gap
+    tm, ok = _solve(l0, l1, l2, w0, w1, w2, a, b, 1, -l0 - u)
+    if not ok:
+        return -1
+    if _phi(l0, l1, l2, w0, w1, w2, tm)[0] > 0.0:
+        return 0
+    t, ok = _solve(l0, l1, l2, w0, w1, w2, a, tm, 0, tm - 0.5 * (tm - a) * 0.1)
+    if not ok:
+        return -1
+    out[0] = t
+    t, ok = _solve(l0, l1, l2, w0, w1, w2, tm, b, 0, tm + 0.5 * (b - tm) * 0.1)
+    if not ok:
+        return -1
+    out[1] = t
+    return 2
+
+
+@numba.njit(cache=False)
+def _f_at(V, nv, nx, ny, nz):
+    """h_B(-n) over the vertices V (A's frame) and the index of the best."""
+    best = -np.inf
+    for u in range(nv):
+        s = -(nx * V[u, 0] + ny * V[u, 1] + nz * V[u, 2])
+        if s > best:
+            best = s
+    return best
+
+
+@numba.njit(cache=False)
+def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale):
+    """min f for the ellipsoid of ``radii`` (A, at the origin of its frame) and the hull
+    of ``pts`` (B's frame; faces ``fn``, ``fo``, edges ``edges`` of hull_data) posed by
+    R, t in A's frame: res = [-min f, n, pa, pb] (as gjk_epa's rows); returns (decided,
+    edge solves, vertex solves).  Scratch: V (>= nv, 3) the vertices in A's frame, FS
+    (>= nf, 7) per face E's support point at n = -m, f(n) and n; out (8,) roots."""
+    a0, a1, a2 = radii[0] ** 2, radii[1] ** 2, radii[2] ** 2
+    amin = math.sqrt(min(a0, min(a1, a2)))
+    amax = math.sqrt(max(a0, max(a1, a2)))
+    rroll = amin * amin / amax
+    nv = pts.shape[0]
+    for u in range(nv):
+        for c in range(3):
+            V[u, c] = R[c, 0] * pts[u, 0] + R[c, 1] * pts[u, 1] + R[c, 2] * pts[u, 2] + t[c]
+    tol = 1e-12 * scale
+    U = np.inf
+    bx = by = bz = 0.0
+    for f in range(fn.shape[0]):
+        mx = R[0, 0] * fn[f, 0] + R[0, 1] * fn[f, 1] + R[0, 2] * fn[f, 2]
+        my = R[1, 0] * fn[f, 0] + R[1, 1] * fn[f, 1] + R[1, 2] * fn[f, 2]
+        mz = R[2, 0] * fn[f, 0] + R[2, 1] * fn[f, 1] + R[2, 2] * fn[f, 2]
+        hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
+        val = hA + fo[f] + mx * t[0] + my * t[1] + mz * t[2]
+        # n = -m; E's support point there, -a m / hA
+        FS[f, 0], FS[f, 1], FS[f, 2], FS[f, 3] = -a0 * mx / hA, -a1 * my / hA, -a2 * mz / hA, val
+        FS[f, 4], FS[f, 5], FS[f, 6] = -mx, -my, -mz
+        if val < U:
+            U = val
+            bx, by, bz = -mx, -my, -mz
+    n_e = 0
+    n_v = 0
+    for e in range(edges.shape[0]):
+        ia, ib, f1, f2 = edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3]
+        vx, vy, vz = V[ia, 0], V[ia, 1], V[ia, 2]
+        # the arc's ends n1 = -m1, n2 = -m2, f there, and E's support points there
+        n1x, n1y, n1z = FS[f1, 4], FS[f1, 5], FS[f1, 6]
+        n2x, n2y, n2z = FS[f2, 4], FS[f2, 5], FS[f2, 6]
+        g1, g2 = FS[f1, 3], FS[f2, 3]
+        # tangent planes of g at the arc's ends, over the chord (|x| <= 1 there)
+        c12 = (FS[f1, 0] - vx) * n2x + (FS[f1, 1] - vy) * n2y + (FS[f1, 2] - vz) * n2z
+        c21 = (FS[f2, 0] - vx) * n1x + (FS[f2, 1] - vy) * n1y + (FS[f2, 2] - vz) * n1z
+        den = (g1 - c21) + (g2 - c12)
+        if den > 0.0:
+            al = (g2 - c12) / den
+            lb = al * g1 + (1.0 - al) * c12
+        else:
+            lb = min(g1, g2)
+        if lb >= U - tol:
+            continue
+        n_e += 1
+        # the 2-D problem in the plane normal to the edge: basis p, q
+        ex, ey, ez = V[ib, 0] - vx, V[ib, 1] - vy, V[ib, 2] - vz
+        el = math.sqrt(ex * ex + ey * ey + ez * ez)
+        ex, ey, ez = ex / el, ey / el, ez / el
+        px, py, pz = n1x, n1y, n1z          # n1 is normal to the edge
+        qx, qy, qz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
+        g11 = a0 * px * px + a1 * py * py + a2 * pz * pz
+        g12 = a0 * px * qx + a1 * py * qy + a2 * pz * qz
+        g22 = a0 * qx * qx + a1 * qy * qy + a2 * qz * qz
+        # eigen of [[g11, g12], [g12, g22]]
+        tr_ = 0.5 * (g11 + g22)
+        dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
+        lam0, lam1 = tr_ - dd, tr_ + dd
+        if not lam1 - lam0 > 1e-9 * lam1:
+            return False, n_e, n_v
+        # eigenvector of lam0
+        if abs(g11 - lam0) > abs(g22 - lam0):
+            ux, uy = -g12, g11 - lam0
+        else:
+            ux, uy = g22 - lam0, -g12
+        un = math.sqrt(ux * ux + uy * uy)
+        ux, uy = ux / un, uy / un
+        # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux); the point P is v's
+        # projection (on the arc g(n) = h_E(n) - n . v)
+        wp, wq = px * vx + py * vy + pz * vz, qx * vx + qy * vy + qz * vz
+        P0 = ux * wp + uy * wq
+        P1 = -uy * wp + ux * wq
+        w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
+        if not (w0 > 1e-24 * lam1 * scale * scale and w1 > 1e-24 * lam1 * scale * scale):
+            return False, n_e, n_v
+        k = 0
+        if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
+            out[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
+            if not ok:
+                return False, n_e, n_v
+            k = 1
+        if lam0 / math.sqrt(lam1) < U:
+            km = _roots_mid(lam0, lam1, lam1, w0, w1, 0.0, out[k:])
+            if km < 0:
+                return False, n_e, n_v
+            k += km
+        for r in range(k):
+            tt = out[r]
+            N0, N1 = P0 / (lam0 + tt), P1 / (lam1 + tt)
+            nn = math.sqrt(N0 * N0 + N1 * N1)
+            val = -tt * nn
+            if not val < U:
+                continue
+            c0, c1 = N0 / nn, N1 / nn
+            # back to the plane basis, then 3-D
+            ap, aq = ux * c0 - uy * c1, uy * c0 + ux * c1
+            nx, ny, nz = ap * px + aq * qx, ap * py + aq * qy, ap * pz + aq * qz
+            # in the edge's arc: B's support along -n attained at v (within tol)
+            if _f_at(V, nv, nx, ny, nz) > -(nx * vx + ny * vy + nz * vz) + tol:
+                continue
+            U = val
+            bx, by, bz = nx, ny, nz
+    lam = (a0, a1, a2)
+    # sorted order of the axes
+    i0, i1, i2 = 0, 1, 2
+    if lam[i0] > lam[i1]:
+        i0, i1 = i1, i0
+    if lam[i1] > lam[i2]:
+        i1, i2 = i2, i1
+    if lam[i0] > lam[i1]:
+        i0, i1 = i1, i0
+    l0, l1, l2 = lam[i0], lam[i1], lam[i2]
+    if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
+        return False, n_e, n_v
+    L = 0.0
+    for u in range(nv):
+        rho = math.sqrt(V[u, 0] * V[u, 0] / a0 + V[u, 1] * V[u, 1] / a1 + V[u, 2] * V[u, 2] / a2)
+        if rho < 1.0:
+            L = max(L, (1.0 - rho) * amin)
+    for u in range(nv):
+        x = (V[u, 0], V[u, 1], V[u, 2])
+        rho = math.sqrt(x[0] * x[0] / a0 + x[1] * x[1] / a1 + x[2] * x[2] / a2)
+        j0 = rho < 1.0 and (1.0 - rho) * amax >= L - tol
+        mid = l0 / math.sqrt(l2) < U and (rho < 1.0 or 2.0 * rroll + (rho - 1.0) * amin < U)
+        if not (j0 or mid):
+            continue
+        n_v += 1
+        P0, P1, P2 = x[i0], x[i1], x[i2]
+        w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
+        sm = 1e-24 * l2 * scale * scale
+        if not (w0 > sm and w1 > sm and w2 > sm):
+            return False, n_e, n_v
+        k = 0
+        if rho < 1.0 and (1.0 - rho) * amax >= L - tol:
+            out[0], ok = _root_right(l0, l1, l2, w0, w1, w2)
+            if not ok:
+                return False, n_e, n_v
+            k = 1
+        if mid:
+            km = _roots_mid(l0, l1, l2, w0, w1, w2, out[k:])
+            if km < 0:
+                return False, n_e, n_v
+            k += km
+        for r in range(k):
+            tt = out[r]
+            N0, N1, N2 = P0 / (l0 + tt), P1 / (l1 + tt), P2 / (l2 + tt)
+            nn = math.sqrt(N0 * N0 + N1 * N1 + N2 * N2)
+            val = -tt * nn
+            if not val < U:
+                continue
+            c = (N0 / nn, N1 / nn, N2 / nn)
+            # back to axes x, y, z
+            nx = c[0] if i0 == 0 else (c[1] if i1 == 0 else c[2])
+            ny = c[0] if i0 == 1 else (c[1] if i1 == 1 else c[2])
+            nz = c[0] if i0 == 2 else (c[1] if i1 == 2 else c[2])
+            if _f_at(V, nv, nx, ny, nz) > -(nx * x[0] + ny * x[1] + nz * x[2]) + tol:
+                continue
+            U = val
+            bx, by, bz = nx, ny, nz
+    hA = math.sqrt(a0 * bx * bx + a1 * by * by + a2 * bz * bz)
+    res[0] = -U
+    res[1], res[2], res[3] = bx, by, bz
+    res[4], res[5], res[6] = a0 * bx / hA, a1 * by / hA, a2 * bz / hA
+    for c in range(3):
+        res[7 + c] = res[4 + c] - U * res[1 + c]
+    return True, n_e, n_v
+
+
+def hull_data(P):
+    """Faces (outward unit normals, offsets) and edges (a, b, face, face) of the hull of
+    P by brute force over triples (points in general position: triangular faces)."""
+    F = []
+    for i, j, k in itertools.combinations(range(len(P)), 3):
+        m = np.cross(P[j] - P[i], P[k] - P[i])
+        mm = np.linalg.norm(m)
+        if mm < 1e-12:
+            continue
+        m /= mm
+        s = P @ m - m @ P[i]
+        if np.all(s <= 1e-12):
+            F.append((i, j, k, m, m @ P[i]))
+        elif np.all(s >= -1e-12):
+            F.append((i, k, j, -m, -(m @ P[i])))
+    ef = collections.defaultdict(list)
+    for fi, (i, j, k, m, o) in enumerate(F):
+        for a, b in ((i, j), (j, k), (k, i)):
+            ef[(min(a, b), max(a, b))].append(fi)
+    E = np.array([(a, b, f[0], f[1]) for (a, b), f in ef.items()], np.int64)
+    return np.array([f[3] for f in F]), np.array([f[4] for f in F]), E
+
+
+@numba.njit(cache=False)
+def run_all(radii, rot, tr, P, vr, FN, FO, fr, E, er, res, dec, ne, nv, scale, reps):
+    V = np.empty((128, 3))
+    FS = np.empty((256, 7))
+    out = np.empty(8)
+    for _ in range(reps):
+        for k in range(rot.shape[0]):
+            d, a, b = ellipsoid_hull_depth(radii[k], rot[k], tr[k], P[vr[k, 0]:vr[k, 1]],
+                                           FN[fr[k, 0]:fr[k, 1]], FO[fr[k, 0]:fr[k, 1]],
+                                           E[er[k, 0]:er[k, 1]], V, FS, out, res[k],
+                                           scale[k])
+            dec[k] = d
+            ne[k] = a
+            nv[k] = b
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--n", type=int, default=1000, help="deep pairs to take")
+    ap.add_argument("--cases", default="/tmp/mkc_deep_pairs")
+    ap.add_argument("--reps", type=int, default=20)
+    args = ap.parse_args()
+    numba.set_num_threads(1)
+    row = "ellipsoid-convex"
+    shapes, table, pairs, pos, quat = load_cases(args.cases, row)
+    rot, tr = relative_poses(pos, quat)
+    scale = table.params[0::2, 7] + table.params[1::2, 7]
+    ref = np.load(os.path.join(args.cases, f"ref_{row}_gjk_epa.npz"))
+    sel = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)[:args.n]
+    Ps, FNs, FOs, Es, vr, fr, er = [], [], [], [], [], [], []
+    cv = cf = ce = 0
+    for k in sel:
+        P = np.array(shapes[2 * k + 1]["points"])
+        fn, fo, E = hull_data(P)
+        Ps.append(P)
+        FNs.append(fn)
+        FOs.append(fo)
+        Es.append(E)
+        vr.append((cv, cv + len(P)))
+        fr.append((cf, cf + len(fn)))
+        er.append((ce, ce + len(E)))
+        cv, cf, ce = cv + len(P), cf + len(fn), ce + len(E)
+    radii = np.array([shapes[2 * k]["radii"] for k in sel])
+    data = (radii, rot[sel].copy(), tr[sel].copy(), np.concatenate(Ps), np.array(vr),
+            np.concatenate(FNs), np.concatenate(FOs), np.array(fr), np.concatenate(Es),
+            np.array(er))
+    n = len(sel)
+    res = np.zeros((n, 10))
+    dec = np.zeros(n, np.bool_)
+    ne, nv = np.zeros(n, np.int64), np.zeros(n, np.int64)
+    run_all(*data, res, dec, ne, nv, scale[sel], 1)
+    ro = ref["out"][sel]
+    err = np.abs(res[:, 0] - ro[:, 0]) / scale[sel]
+    ang = np.arccos(np.clip(np.sum(res[:, 1:4] * ro[:, 1:4], 1), -1.0, 1.0))
+    print(f"{n} deep {row} pairs: {dec.sum()} decided; against GJK/EPA's reference, depth "
+          f"max {err[dec].max():.1e} * scale, normal max {ang[dec].max():.1e} rad; "
+          f"per pair {ne.mean():.2f} edge and {nv.mean():.2f} vertex solves")
+    ts = []
+    for _ in range(7):
+        t0 = time.perf_counter()
+        run_all(*data, res, dec, ne, nv, scale[sel], args.reps)
+        ts.append((time.perf_counter() - t0) / args.reps / n)
+    sub = subset(shapes, pos, quat, sel)
+    t_epa = min(run_ours(sub[1], sub[2], sub[3], sub[4], M_GJK_EPA, 7)[0] for _ in range(3))
+    print(f"prototype {min(ts) * 1e6:.3f} us per pair (fastest of 7 runs of {args.reps}); "
+          f"batch kernel, GJK/EPA on the same pairs, {t_epa * 1e6:.3f} us "
+          f"(ratio {min(ts) / t_epa:.2f})")
+
+
+if __name__ == "__main__":
+    main()

@@ -23,9 +23,11 @@ surface is I + t D^-1 on the tangent plane), so the others are never searched.
 Pruning (every bound rigorous; U the best value so far):
   * an edge: g >= max of its tangent planes at the arc's ends, taken over the chord
     between the ends (|x| <= 1 there, g homogeneous), a closed form per edge;
-  * a vertex's foot right of the pole: every inside vertex u gives depth >= (1 - rho_u)
-    a_min (the ball about u inside E), and a vertex's own foot is at most (1 - rho)
-    a_max away, so it can be the answer only if that reaches the largest such bound;
+  * a vertex's foot right of the pole: A - B holds E - u for every vertex u, so the
+    depth is at least u's depth in E when u is inside: at least (1 - rho_u) a_min (the
+    ball about u inside E; rho the ellipsoid norm) and exactly the foot's distance
+    once solved.  A vertex's own foot is at most (1 - rho) a_max away, so it is
+    searched only if that reaches the largest such bound L, and kept only if >= L;
   * the roots between the poles: their value is at least l0 / sqrt(l2) (the rolling
     radius), and for a vertex outside E at least 2 r_roll + (rho - 1) a_min (the inner
     normal crosses the rolling ball, then reaches the vertex); a two-term test of the
@@ -39,9 +41,10 @@ plane, a bracket that fails), to GJK/EPA as boxell.py does.
     PYTHONPATH=. .venv/bin/python bench/hull_fan.py [--n 1000]
 
 Prints: decided pairs, the largest depth and normal differences against the saved GJK/EPA
-reference (bench/deep_pairs.py --save ellipsoid-convex makes it), edge and vertex solves
-per pair, the time per pair of the prototype (one thread, numba loop over the pairs),
-and of the batch kernel's GJK/EPA on the same pairs, and of the prototype's parts.
+reference (``bench/deep_pairs.py --save ellipsoid-convex`` writes it), edge and vertex
+solves per pair, the time per pair of the prototype (one thread, a numba loop over the
+pairs; the hulls' faces and edges are data, as a table would hold them) and of the
+batch kernel's GJK/EPA on the same pairs (bench/narrowphase.run_ours).
 """
 import argparse
 import collections
@@ -63,6 +66,8 @@ from bench.regimes import subset  # noqa: E402
 from mkcollision_ros.kernels.constants import M_GJK_EPA  # noqa: E402
 
 ITERS = 60          # cap of every 1-D root search
+ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
+DMIN_RTOL = 1e-9    # the minimum of phi between two poles: only its sign is used
 
 
 @numba.njit(cache=False)
@@ -74,32 +79,15 @@ def _phi(l0, l1, l2, w0, w1, w2, t):
 
 
 @numba.njit(cache=False)
-def _solve(l0, l1, l2, w0, w1, w2, lo, hi, deriv, t0):
-    """Root of phi (deriv 0) or of phi' (deriv 1) in [lo, hi], where it changes sign,
-    by Newton's method kept in the bracket (bisection when it leaves it)."""
-    f_lo = _phi(l0, l1, l2, w0, w1, w2, lo)[deriv]
-    f_hi = _phi(l0, l1, l2, w0, w1, w2, hi)[deriv]
-    if f_lo == 0.0:
-        return lo, True
-    if f_hi == 0.0:
-        return hi, True
-    if (f_lo > 0.0) == (f_hi > 0.0):
-        return 0.0, False
-    up = f_lo < 0.0           # increasing through the root
-    t = t0 if lo < t0 < hi else 0.5 * (lo + hi)
+def _newton_from(l0, l1, l2, w0, w1, w2, t):
+    """Newton's method on phi from t with phi(t) >= 0 on a convex, monotone branch of
+    phi: the steps move toward the root and never pass it (no bracket needed)."""
     for _ in range(ITERS):
         r = _phi(l0, l1, l2, w0, w1, w2, t)
-        g, dg = r[deriv], r[deriv + 1]
-        if g == 0.0:
+        if not r[0] > 0.0:
             return t, True
-        if (g < 0.0) == up:
-            lo = t
-        else:
-            hi = t
-        tn = t - g / dg if dg != 0.0 else 0.5 * (lo + hi)
-        if not (lo < tn < hi):
-            tn = 0.5 * (lo + hi)
-        if abs(tn - t) <= 1e-15 * (abs(t) + 1e-300) or hi - lo <= 4e-16 * abs(hi):
+        tn = t - r[0] / r[1]
+        if abs(tn - t) <= ROOT_RTOL * (abs(t) + l0):
             return tn, True
         t = tn
     return t, False
@@ -108,47 +96,58 @@ def _solve(l0, l1, l2, w0, w1, w2, lo, hi, deriv, t0):
 @numba.njit(cache=False)
 def _root_right(l0, l1, l2, w0, w1, w2):
     """The root of sum w_i / (l_i + t)^2 = 1 right of the pole -l0 (l0 the least):
-    phi is convex and decreasing there, so Newton's method from the left end of the
-    bracket [-l0 + sqrt(w0), ...] climbs to it monotonically."""
-    t = -l0 + math.sqrt(w0)
-    for _ in range(ITERS):
-        r = _phi(l0, l1, l2, w0, w1, w2, t)
-        if not r[0] > 0.0:
-            return t, True
-        tn = t - r[0] / r[1]
-        if not tn > t:
-            return t, True
-        if tn - t <= 1e-15 * (abs(t) + l0):
-            return tn, True
-        t = tn
-    return t, False
+    phi is convex and decreasing there, and >= 0 at -l0 + sqrt(w0) (its first term
+    alone is 1 there)."""
+    return _newton_from(l0, l1, l2, w0, w1, w2, -l0 + math.sqrt(w0))
 
 
 @numba.njit(cache=False)
 def _roots_mid(l0, l1, l2, w0, w1, w2, out):
     """The roots of phi between the poles -l1 and -l0 (phi convex, +inf at both):
-    0 or 2, in out[0:2]; returns the count, -1 if a bracket did not hold."""
+    0 or 2, in out[0:2]; returns the count, -1 if a search failed."""
     gap = l1 - l0
-    # with the other term dropped phi is no larger: no root if that one has none
-    c0, c1 = w0 ** (1.0 / 3.0), w1 ** (1.0 / 3.0)
+    # with the third term dropped phi is no larger, and that one's least value is
+    # ((w0^1/3 + w1^1/3)^3 / gap^2 - 1): no root if it is > 0 ((.)^3 >= w0 + w1 first)
+    if w0 + w1 > gap * gap:
+        return 0
+    c0, c1 = np.cbrt(w0), np.cbrt(w1)
     if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
         return 0
-    u = gap * c0 / (c0 + c1)
-    a = -l1 + 1e-9 * gap
-    b = -l0 - 1e-9 * gap
-    tm, ok = _solve(l0, l1, l2, w0, w1, w2, a, b, 1, -l0 - u)
-    if not ok:
-        return -1
-    if _phi(l0, l1, l2, w0, w1, w2, tm)[0] > 0.0:
+    # Newton's method on phi' (increasing) from the two-term minimiser, in the bracket,
+    # until a point with phi <= 0 (then two roots) or phi's minimum (> 0: none)
+    lo = -l1 + 1e-9 * gap
+    hi = -l0 - 1e-9 * gap
+    t = -l0 - gap * c0 / (c0 + c1)
+    neg = False
+    for _ in range(ITERS):
+        r = _phi(l0, l1, l2, w0, w1, w2, t)
+        if not r[0] > 0.0:
+            neg = True
+            break
+        if r[1] < 0.0:
+            lo = t
+        else:
+            hi = t
+        tn = t - r[1] / r[2]
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= DMIN_RTOL * abs(t):
+            break
+        t = tn
+    if not neg:
         return 0
-    t, ok = _solve(l0, l1, l2, w0, w1, w2, a, tm, 0, tm - 0.5 * (tm - a) * 0.1)
+    # the left root: phi convex and decreasing on (-l1, t], >= 0 at -l1 + sqrt(w1); the
+    # right one: increasing on [t, -l0), >= 0 at -l0 - sqrt(w0)
+    s0 = -l1 + math.sqrt(w1)
+    s1 = -l0 - math.sqrt(w0)
+    if not (s0 < t < s1):
+        return -1
+    out[0], ok = _newton_from(l0, l1, l2, w0, w1, w2, s0)
     if not ok:
         return -1
-    out[0] = t
-    t, ok = _solve(l0, l1, l2, w0, w1, w2, tm, b, 0, tm + 0.5 * (b - tm) * 0.1)
+    out[1], ok = _newton_from(l0, l1, l2, w0, w1, w2, s1)
     if not ok:
         return -1
-    out[1] = t
     return 2
 
 
@@ -188,7 +187,8 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
         hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
         val = hA + fo[f] + mx * t[0] + my * t[1] + mz * t[2]
         # n = -m; E's support point there, -a m / hA
-        FS[f, 0], FS[f, 1], FS[f, 2], FS[f, 3] = -a0 * mx / hA, -a1 * my / hA, -a2 * mz / hA, val
+        ih = 1.0 / hA
+        FS[f, 0], FS[f, 1], FS[f, 2], FS[f, 3] = -a0 * mx * ih, -a1 * my * ih, -a2 * mz * ih, val
         FS[f, 4], FS[f, 5], FS[f, 6] = -mx, -my, -mz
         if val < U:
             U = val
@@ -283,14 +283,18 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
     l0, l1, l2 = lam[i0], lam[i1], lam[i2]
     if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
         return False, n_e, n_v
+    # L: a lower bound on the depth, the largest (1 - rho) a_min of an inside vertex,
+    # raised to a vertex's exact depth in E (its foot right of the pole) once found
     L = 0.0
+    i0_, i1_, i2_ = 1.0 / a0, 1.0 / a1, 1.0 / a2
     for u in range(nv):
-        rho = math.sqrt(V[u, 0] * V[u, 0] / a0 + V[u, 1] * V[u, 1] / a1 + V[u, 2] * V[u, 2] / a2)
+        rho = math.sqrt(V[u, 0] * V[u, 0] * i0_ + V[u, 1] * V[u, 1] * i1_
+                        + V[u, 2] * V[u, 2] * i2_)
         if rho < 1.0:
             L = max(L, (1.0 - rho) * amin)
     for u in range(nv):
         x = (V[u, 0], V[u, 1], V[u, 2])
-        rho = math.sqrt(x[0] * x[0] / a0 + x[1] * x[1] / a1 + x[2] * x[2] / a2)
+        rho = math.sqrt(x[0] * x[0] * i0_ + x[1] * x[1] * i1_ + x[2] * x[2] * i2_)
         j0 = rho < 1.0 and (1.0 - rho) * amax >= L - tol
         mid = l0 / math.sqrt(l2) < U and (rho < 1.0 or 2.0 * rroll + (rho - 1.0) * amin < U)
         if not (j0 or mid):
@@ -302,7 +306,7 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
         if not (w0 > sm and w1 > sm and w2 > sm):
             return False, n_e, n_v
         k = 0
-        if rho < 1.0 and (1.0 - rho) * amax >= L - tol:
+        if j0:
             out[0], ok = _root_right(l0, l1, l2, w0, w1, w2)
             if not ok:
                 return False, n_e, n_v
@@ -317,7 +321,9 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
             N0, N1, N2 = P0 / (l0 + tt), P1 / (l1 + tt), P2 / (l2 + tt)
             nn = math.sqrt(N0 * N0 + N1 * N1 + N2 * N2)
             val = -tt * nn
-            if not val < U:
+            if r == 0 and j0:
+                L = max(L, val)         # the vertex's depth in E: depth >= it
+            if not (val < U and val >= L - tol):
                 continue
             c = (N0 / nn, N1 / nn, N2 / nn)
             # back to axes x, y, z

@@ -37,9 +37,10 @@ Pruning (every bound rigorous; U the best value so far):
     of the secular equation (the point outside the evolute) shows there are none.
 
 The pruning assumes the pair penetrates (outside vertices' negative feet are skipped), so
-the kernel first proves it: a hull vertex inside E or E's centre inside B, else it
-returns undecided after the faces' pass, as it does on near-degenerate input (equal
-semi-axes, a point on an axis plane, a search that fails).  A kernel in the product
+the kernel proves it: a hull vertex inside E or E's centre inside B, else the midpoint
+of the answer's witness points inside both (checked at the end: the answer found under
+the assumption is then exact); else it returns undecided, as it does on near-degenerate
+input (equal semi-axes, a point on an axis plane, a search that fails).  A kernel in the product
 would hand those to GJK/EPA, as boxell.py does.
 
     PYTHONPATH=. .venv/bin/python bench/hull_fan.py [--n 1000]
@@ -197,7 +198,8 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
     of ``pts`` (B's frame; faces ``fn``, ``fo``, edges ``edges`` of hull_data) posed by
     R, t in A's frame: res = [-min f, n, pa, pb] (as gjk_epa's rows); returns (decided,
     edge solves, vertex solves).  Scratch: V (>= nv, 3) the vertices in A's frame, FS
-    (>= nf, 7) per face E's support point at n = -m, f(n) and n; out (8,) roots."""
+    (>= nf, 8) per face E's support point at n = -m, f(n), n and B's offset; out (8,)
+    roots."""
     a0, a1, a2 = radii[0] ** 2, radii[1] ** 2, radii[2] ** 2
     amin = math.sqrt(min(a0, min(a1, a2)))
     amax = math.sqrt(max(a0, max(a1, a2)))
@@ -221,7 +223,7 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
         # n = -m; E's support point there, -a m / hA
         ih = 1.0 / hA
         FS[f, 0], FS[f, 1], FS[f, 2], FS[f, 3] = -a0 * mx * ih, -a1 * my * ih, -a2 * mz * ih, val
-        FS[f, 4], FS[f, 5], FS[f, 6] = -mx, -my, -mz
+        FS[f, 4], FS[f, 5], FS[f, 6], FS[f, 7] = -mx, -my, -mz, off
         if val < U:
             U = val
             bx, by, bz = -mx, -my, -mz
@@ -234,10 +236,10 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
                         + V[u, 2] * V[u, 2] * i2_)
         if rho < 1.0:
             L = max(L, (1.0 - rho) * amin)
-    # the pair must penetrate (the pruning below skips the negative feet): a hull vertex
-    # inside E (L > 0) or E's centre inside B
-    if not (L > 0.0 or cin > 0.0):
-        return False, 0, 0
+    # the pruning below skips the negative feet, so the pair must be proved to overlap:
+    # a hull vertex inside E (L > 0) or E's centre inside B now, else the midpoint of
+    # the answer's witnesses in both at the end
+    proved = L > 0.0 or cin > 0.0
     n_e = 0
     n_v = 0
     for e in range(edges.shape[0]):
@@ -387,6 +389,17 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
             U = val
             bx, by, bz = nx, ny, nz
     hA = math.sqrt(a0 * bx * bx + a1 * by * by + a2 * bz * bz)
+    if not proved:
+        # pa = E's support along n, pb = pa - U n; their midpoint q
+        ih = 1.0 / hA
+        qx = a0 * bx * ih - 0.5 * U * bx
+        qy = a1 * by * ih - 0.5 * U * by
+        qz = a2 * bz * ih - 0.5 * U * bz
+        if not qx * qx * i0_ + qy * qy * i1_ + qz * qz * i2_ <= 1.0:
+            return False, n_e, n_v
+        for f in range(fn.shape[0]):
+            if -(FS[f, 4] * qx + FS[f, 5] * qy + FS[f, 6] * qz) > FS[f, 7]:
+                return False, n_e, n_v
     res[0] = -U
     res[1], res[2], res[3] = bx, by, bz
     res[4], res[5], res[6] = a0 * bx / hA, a1 * by / hA, a2 * bz / hA
@@ -421,7 +434,7 @@ def hull_data(P):
 @numba.njit(cache=False)
 def run_all(radii, rot, tr, P, vr, FN, FO, fr, E, er, res, dec, ne, nv, scale, reps):
     V = np.empty((128, 3))
-    FS = np.empty((256, 7))
+    FS = np.empty((256, 8))
     out = np.empty(8)
     for _ in range(reps):
         for k in range(rot.shape[0]):

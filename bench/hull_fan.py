@@ -159,7 +159,7 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out):
 
 @numba.njit(cache=False)
 def _f_at(V, nv, nx, ny, nz):
-    """h_B(-n) over the vertices V (A's frame) and the index of the best."""
+    """h_B(-n): the largest -n . v over the first nv vertices V (A's frame)."""
     best = -np.inf
     for u in range(nv):
         s = -(nx * V[u, 0] + ny * V[u, 1] + nz * V[u, 2])

@@ -73,7 +73,7 @@ from mkcollision_ros.kernels.narrowphase import collide_batch  # noqa: E402
 
 ITERS = 60          # cap of every 1-D root search
 ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
-DMIN_RTOL = 1e-9    # the minimum of phi between two poles: only its sign is used
+DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
 
 
 @numba.njit(cache=False)
@@ -120,30 +120,32 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out):
     if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
         return 0
     # Newton's method on phi' (increasing) from the two-term minimiser, in the bracket,
-    # until a point with phi <= 0 (then two roots) or phi's minimum (> 0: none)
+    # until a point with phi <= 0 (then two roots) or a proof that phi > 0 (none)
     lo = -l1 + 1e-9 * gap
     hi = -l0 - 1e-9 * gap
     t = -l0 - gap * c0 / (c0 + c1)
-    neg = False
     for _ in range(ITERS):
         r = _phi(l0, l1, l2, w0, w1, w2, t)
         if not r[0] > 0.0:
-            neg = True
             break
         if r[1] < 0.0:
             lo = t
         else:
             hi = t
+        # phi convex: its least value (in [lo, hi]) is >= phi(t) - |phi'(t)| (hi - lo)
+        if r[0] - abs(r[1]) * (hi - lo) > 0.0:
+            return 0
         tn = t - r[1] / r[2]
         if not (lo < tn < hi):
             tn = 0.5 * (lo + hi)
         if abs(tn - t) <= DMIN_RTOL * abs(t):
-            break
+            return -1                   # a minimum too close to 0 to tell
         t = tn
-    if not neg:
-        return 0
-    # the left root: phi convex and decreasing on (-l1, t], >= 0 at -l1 + sqrt(w1); the
-    # right one: increasing on [t, -l0), >= 0 at -l0 - sqrt(w0)
+    else:
+        return -1                       # neither found
+    # phi(t) <= 0: t lies between the roots.  phi >= 0 at s0 = -l1 + sqrt(w1) and at
+    # s1 = -l0 - sqrt(w0) (a term alone is 1 there); if s0 < t < s1, they lie beyond
+    # the roots, and phi, convex, is monotone from each to its root
     s0 = -l1 + math.sqrt(w1)
     s1 = -l0 - math.sqrt(w0)
     if not (s0 < t < s1):

@@ -251,9 +251,11 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
         n1x, n1y, n1z = FS[f1, 4], FS[f1, 5], FS[f1, 6]
         n2x, n2y, n2z = FS[f2, 4], FS[f2, 5], FS[f2, 6]
         g1, g2 = FS[f1, 3], FS[f2, 3]
-        # tangent planes of g at the arc's ends, over the chord (|x| <= 1 there)
-        c12 = (FS[f1, 0] - vx) * n2x + (FS[f1, 1] - vy) * n2y + (FS[f1, 2] - vz) * n2z
-        c21 = (FS[f2, 0] - vx) * n1x + (FS[f2, 1] - vy) * n1y + (FS[f2, 2] - vz) * n1z
+        s1x, s1y, s1z = FS[f1, 0] - vx, FS[f1, 1] - vy, FS[f1, 2] - vz
+        s2x, s2y, s2z = FS[f2, 0] - vx, FS[f2, 1] - vy, FS[f2, 2] - vz
+        # tangent planes of g at the arc's ends (s_i . n), over the chord (|x| <= 1)
+        c12 = s1x * n2x + s1y * n2y + s1z * n2z
+        c21 = s2x * n1x + s2y * n1y + s2z * n1z
         den = (g1 - c21) + (g2 - c12)
         if den > 0.0:
             al = (g2 - c12) / den
@@ -264,8 +266,6 @@ def ellipsoid_hull_depth(radii, R, t, pts, fn, fo, edges, V, FS, out, res, scale
             continue
         # tighter: max of the two tangent planes over the arc itself, each on its side
         # of their crossing (a sinusoid's least value over an arc)
-        s1x, s1y, s1z = FS[f1, 0] - vx, FS[f1, 1] - vy, FS[f1, 2] - vz
-        s2x, s2y, s2z = FS[f2, 0] - vx, FS[f2, 1] - vy, FS[f2, 2] - vz
         d1, d2 = g1 - c21, c12 - g2
         if d1 >= 0.0 and d2 <= 0.0 and d1 - d2 > 0.0:
             cx, cy, cz = d1 * n2x - d2 * n1x, d1 * n2y - d2 * n1y, d1 * n2z - d2 * n1z

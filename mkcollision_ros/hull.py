@@ -38,6 +38,8 @@ import math
 
 import numpy as np
 
+from .kernels.jit import njit_kernel
+
 # a face's "outside": farther above its plane than this (relative to the points' extent);
 # points within it of the hull's surface are kept, so nothing depends on its exact value
 _ABOVE = 1e-10
@@ -300,4 +302,152 @@ def hull_points(points):
         if len(_CACHE) >= _CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[key] = hit
+    return hit
+
+
+# hulls of at most this many points get their normal fan stored (fan_rows): the exact
+# ellipsoid-hull kernel walks every face, edge and vertex, which pays against GJK/EPA
+# only on small hulls, and the brute-force builder below is O(points^4) at worst
+FAN_MAX_POINTS = 64
+_FAN_TOL = 1e-10        # on a face plane: within this times the points' extent
+_FAN_THIN = 1e-6        # a triple spans a plane only if |cross| > this times extent^2
+_FAN_CACHE = {}
+
+
+@njit_kernel
+def _fan_build(P, FN, FO, EV, VX):
+    """The faces (unit outward normals FN, offsets FO), edges EV (a, b, face, face) and
+    vertices VX of the hull of P, by brute force: every triple of points that spans a
+    plane with all points on one side gives a face (coplanar points: one face, its
+    offset the largest n . p), two faces sharing two or more points (within tolerance)
+    share the edge between the extreme two of them.  Returns (faces, edges, vertices),
+    or (0, 0, 0) unless the result is the boundary of a 3-D polytope: every edge
+    between two distinct planes, every face with 3 or more edges, V - E + F = 2."""
+    n = P.shape[0]
+    lo0, lo1, lo2 = P[:, 0].min(), P[:, 1].min(), P[:, 2].min()
+    hi0, hi1, hi2 = P[:, 0].max(), P[:, 1].max(), P[:, 2].max()
+    size = math.sqrt((hi0 - lo0) ** 2 + (hi1 - lo1) ** 2 + (hi2 - lo2) ** 2)
+    if not size > 0.0:
+        return 0, 0, 0
+    tol = _FAN_TOL * size
+    # the points' mean: inside the hull, below every face plane (a face through it
+    # would make the hull flat), so each triple's plane is oriented away from it and
+    # rejected at the first point above it
+    c0, c1, c2 = P[:, 0].mean(), P[:, 1].mean(), P[:, 2].mean()
+    one = np.uint64(1)
+    on = np.zeros(FN.shape[0], np.uint64)     # per face, a bit per point on its plane
+    nf = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            ux, uy, uz = P[j, 0] - P[i, 0], P[j, 1] - P[i, 1], P[j, 2] - P[i, 2]
+            for k in range(j + 1, n):
+                vx, vy, vz = P[k, 0] - P[i, 0], P[k, 1] - P[i, 1], P[k, 2] - P[i, 2]
+                mx, my, mz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+                mm = math.sqrt(mx * mx + my * my + mz * mz)
+                if not mm > _FAN_THIN * size * size:
+                    continue
+                mx, my, mz = mx / mm, my / mm, mz / mm
+                o = mx * P[i, 0] + my * P[i, 1] + mz * P[i, 2]
+                sc = mx * c0 + my * c1 + mz * c2 - o
+                if not abs(sc) > tol:
+                    continue
+                if sc > 0.0:
+                    mx, my, mz, o = -mx, -my, -mz, -o
+                above = False
+                for u in range(n):
+                    if mx * P[u, 0] + my * P[u, 1] + mz * P[u, 2] - o > tol:
+                        above = True
+                        break
+                if above:
+                    continue
+                # a plane already found holds all three: the same face
+                tri = (one << np.uint64(i)) | (one << np.uint64(j)) | (one << np.uint64(k))
+                dup = False
+                for f in range(nf):
+                    if on[f] & tri == tri:
+                        dup = True
+                        break
+                if dup:
+                    continue
+                if nf == FN.shape[0]:
+                    return 0, 0, 0
+                best = o
+                mask = np.uint64(0)
+                for u in range(n):
+                    s = mx * P[u, 0] + my * P[u, 1] + mz * P[u, 2]
+                    best = max(best, s)
+                    if abs(s - o) <= tol:
+                        mask |= one << np.uint64(u)
+                FN[nf, 0], FN[nf, 1], FN[nf, 2], FO[nf] = mx, my, mz, best
+                on[nf] = mask
+                nf += 1
+    ne = 0
+    deg = np.zeros(nf, np.int64)
+    isv = np.zeros(n, np.bool_)
+    for f in range(nf):
+        for g in range(f + 1, nf):
+            common = on[f] & on[g]
+            if common & (common - one) == 0:
+                continue                # fewer than two points on both planes
+            cx = FN[f, 1] * FN[g, 2] - FN[f, 2] * FN[g, 1]
+            cy = FN[f, 2] * FN[g, 0] - FN[f, 0] * FN[g, 2]
+            cz = FN[f, 0] * FN[g, 1] - FN[f, 1] * FN[g, 0]
+            a = b = -1
+            sa, sb = np.inf, -np.inf
+            for u in range(n):
+                if common & (one << np.uint64(u)):
+                    s = cx * P[u, 0] + cy * P[u, 1] + cz * P[u, 2]
+                    if s < sa:
+                        sa, a = s, u
+                    if s > sb:
+                        sb, b = s, u
+            if not (a != b and cx * cx + cy * cy + cz * cz > _FAN_THIN * _FAN_THIN):
+                return 0, 0, 0
+            if ne == EV.shape[0]:
+                return 0, 0, 0
+            EV[ne, 0], EV[ne, 1], EV[ne, 2], EV[ne, 3] = a, b, f, g
+            ne += 1
+            deg[f] += 1
+            deg[g] += 1
+            isv[a] = True
+            isv[b] = True
+    nv = 0
+    for u in range(n):
+        if isv[u]:
+            VX[nv] = u
+            nv += 1
+    if nf < 4 or deg.min() < 3 or nv - ne + nf != 2:
+        return 0, 0, 0
+    return nf, ne, nv
+
+
+def fan_rows(points):
+    """(faces, edges, vertices, rows): the normal fan of the hull of ``points`` (M, 3),
+    M <= FAN_MAX_POINTS, for kernels/hullell.py, as rows to store after the shape's
+    points (and group rows) in the table's verts: ``faces`` rows of unit outward face
+    normals, then one flat run of float64 values three to a row: the faces' offsets
+    (the largest n . p over the points), the ``vertices``' point indices, and per edge
+    four indices (its two end points and its two faces).  (0, 0, 0, no rows) when
+    the points are too many, flat or degenerate (the kernels then use GJK/EPA).
+    Cached by the points' bytes, as hull_points."""
+    P = np.ascontiguousarray(points, dtype=np.float64)
+    none = (0, 0, 0, np.zeros((0, 3)))
+    if not 4 <= len(P) <= FAN_MAX_POINTS:
+        return none
+    key = (P.shape, P.tobytes())
+    hit = _FAN_CACHE.get(key)
+    if hit is None:
+        n = len(P)
+        FN, FO = np.zeros((2 * n, 3)), np.zeros(2 * n)
+        EV, VX = np.zeros((3 * n, 4), np.int64), np.zeros(n, np.int64)
+        nf, ne, nv = _fan_build(P, FN, FO, EV, VX)
+        if nf == 0:
+            hit = none
+        else:
+            flat = np.concatenate([FO[:nf], VX[:nv], EV[:ne].ravel()]).astype(np.float64)
+            flat = np.concatenate([flat, np.zeros(-len(flat) % 3)])
+            hit = (nf, ne, nv, np.concatenate([FN[:nf], flat.reshape(-1, 3)]))
+        if len(_FAN_CACHE) >= _CACHE_SIZE:
+            _FAN_CACHE.pop(next(iter(_FAN_CACHE)))
+        _FAN_CACHE[key] = hit
     return hit

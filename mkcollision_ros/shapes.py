@@ -30,9 +30,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .hull import hull_points
+from .hull import fan_rows, hull_points
 from .kernels.constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID,
-                                N_PARAMS, P_GROUPS, P_MARGIN, P_RADIUS, P_ROLL, PLANE,
+                                N_PARAMS, P_FAN_EDGES, P_FAN_FACES, P_FAN_VERTS,
+                                P_GROUPS, P_MARGIN, P_RADIUS, P_ROLL, PLANE,
                                 SHAPE_NAMES, SPHERE)
 
 SHAPE_CODES = {name: code for code, name in enumerate(SHAPE_NAMES)}
@@ -162,9 +163,15 @@ def shape_row(shape, base_dir=None, prune=True):
                              f"got shape {verts.shape}")
         if not np.all(np.isfinite(verts)):
             raise ValueError("convex shape: points must be finite")
+        fan = np.zeros((0, 3))
         if prune:
             verts, groups = hull_points(verts)
             prm[P_GROUPS] = len(groups) // 2
+            if len(groups) == 0:
+                # the hull's faces, edges and vertices for the exact ellipsoid-hull
+                # kernel (kernels/hullell.py; small hulls only, none when degenerate)
+                nf, ne, nv, fan = fan_rows(verts)
+                prm[P_FAN_FACES], prm[P_FAN_EDGES], prm[P_FAN_VERTS] = nf, ne, nv
         radius = float(np.linalg.norm(verts, axis=1).max())
     else:  # PLANE
         n = _vector(shape, "normal", 3, positive=False)
@@ -178,13 +185,20 @@ def shape_row(shape, base_dir=None, prune=True):
     prm[P_RADIUS] = radius + margin if code != PLANE else 0.0
     if code == CONVEX and prm[P_GROUPS] > 0:
         verts = np.concatenate([verts, groups])
+    elif code == CONVEX and prm[P_FAN_FACES] > 0:
+        verts = np.concatenate([verts, fan])
     return code, prm, verts
 
 
 def point_count(code, prm, verts):
     """How many of ``shape_row``'s rows ``verts`` are the shape's points (the rest, a
-    large hull's group rows, mkcollision_ros.hull.support_groups)."""
-    return len(verts) - (2 * int(prm[P_GROUPS]) if code == CONVEX else 0)
+    large hull's group rows, mkcollision_ros.hull.support_groups, or a small hull's
+    normal fan, mkcollision_ros.hull.fan_rows)."""
+    if code != CONVEX:
+        return len(verts)
+    nf, ne, nv = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
+    fan = nf + (nf + nv + 4 * ne + 2) // 3 if nf > 0 else 0
+    return len(verts) - 2 * int(prm[P_GROUPS]) - fan
 
 
 def build_table(shapes, base_dir=None, prune=True):

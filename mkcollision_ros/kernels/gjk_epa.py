@@ -196,6 +196,7 @@ from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_de
                      segment_cylinder_depth, sides_crossing)
 from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core_xyz,
                        shape_scale)
+from .hullell import HE_ROWS, ellipsoid_hull_depth, ellipsoid_hull_pair
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -243,6 +244,7 @@ _PW = _PN + _PK
 _FN = _PW + _PK
 _FS_ROWS = _FN + EPA_MAX_FACES
 _BC_ROWS = BC_MAX_LEVEL + 8   # boxcyl's scratch, in the EPA vertex rows (free then)
+assert _V + HE_ROWS <= _FS_ROWS   # hullell's scratch rows likewise, before GJK
 _LAM, _LAMP, _L3, _VOL, _RES, _VV = 0, 4, 8, 11, 15, 25
 _FD = 28
 _FV_SIZE = _FD + EPA_MAX_FACES
@@ -2753,6 +2755,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # proving them farther apart than the cutoff and the touching band
         d, exact = ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
         if exact or (d < 0.0 and -d - ra - rb > band):
+            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+    elif ellipsoid_hull_pair(sa, sb):
+        # an ellipsoid and a small hull with its normal fan stored (hullell): the cores'
+        # exact depth when they are proved to overlap; else GJK and EPA
+        if ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, fs[_V:_V + HE_ROWS],
+                                fv[_FD:_FD + 8], res):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,

@@ -1,0 +1,479 @@
+"""An ellipsoid and a small convex hull in closed form and 1-D root searches, before GJK
+and EPA: the exact depth of the ellipsoid E and the hull B over B's normal fan
+(gjk_epa.gjk_epa_ws calls ellipsoid_hull_depth first for such a pair when the hull has
+its fan stored, mkcollision_ros.hull.fan_rows; where it decides nothing it returns
+False and GJK and EPA run as for any pair).
+
+Why: on overlapping ellipsoid-hull pairs EPA needs ~16 supports of A - B when the
+minimum lies at a hull face, ~30 at an edge and ~47 at a vertex (BENCHMARKS.md,
+session 41), each a pass over the hull's points; the fan needs one pass over the faces,
+bounds for most edges and vertices, and a few Newton searches.
+
+The problem, in E's frame (E centred at the origin, squared semi-axes l_i): the depth
+is min over unit n of f(n) = h_E(n) + h_B(-n), h the support function.  B's normal fan
+splits the sphere of directions into its faces' normals (points), its edges' arcs and
+its vertices' cones; the minimiser lies in one of them and is a critical point of f
+restricted to it.  So the candidates are:
+
+  * each face's outward normal m, at n = -m: f = sqrt(m^T L m) + B's offset along m;
+  * each edge's arc: with v the edge's point, f(n) = h_E(n) - n . v on the arc, whose
+    critical points are the normals of E projected along the edge (an ellipse) at the
+    feet of the normals from v's projection to it;
+  * each vertex's cone: the same for E itself and the vertex.
+
+A foot is a root t of the secular equation sum_i w_i / (l_i + t)^2 = 1 (w_i = l_i P_i^2,
+P the point in the ellipse's or E's axes); the normal there is N_i = P_i / (l_i + t) and
+f = -t |N|.  It counts only if B's support along -n is attained at that edge or vertex
+(within 1e-12 * scale).  Of the roots only the one right of the least pole and the two
+between the two least poles can be local minima of the distance on the surface (its
+Hessian on the tangent plane is I + t D^-1), so no other is searched.
+
+Pruning (every bound rigorous; U the least value found so far, starting from the
+faces'):
+  * an edge: f on its arc is at least the larger of its tangent planes at the arc's
+    ends (f is convex and homogeneous), taken over the chord between the ends (a closed
+    form), and where that does not clear U, over the arc itself (each plane on its side
+    of their crossing: a sinusoid's least value over an arc);
+  * a vertex u inside E: A - B holds E - u, so the depth is at least u's depth in E,
+    at least (1 - rho_u) a_min (rho the ellipsoid norm, a the semi-axes) and exactly
+    the distance to u's foot right of the pole once that is solved (L below, the largest
+    such bound).  u's own foot is at most (1 - rho_u) a_max away, so it is searched
+    only if that reaches L;
+  * the roots between the poles: their value is at least l0 / sqrt(l2) (the rolling
+    radius), at least |P_0| l1 / (l1 - l0) (the foot lies on the far side along the
+    least axis), and for a vertex outside E at least 2 r_roll + (rho - 1) a_min (the
+    inner normal crosses the rolling ball, then reaches the vertex); a two-term bound
+    of the secular equation (the point outside the evolute) shows there are none
+    before any search.
+
+The pruning skips the negative feet of vertices outside E, so it holds only if E and B
+overlap; the kernel proves that: a hull vertex inside E or E's centre inside B, else
+the midpoint of the answer's witness points inside both (checked at the end: the answer
+found under the assumption is then exact).  Else, and on near-degenerate input (equal
+semi-axes, a point on an axis plane, a search that does not converge), it returns
+False.  A face plane with E wholly beyond it ends the call at once (apart: GJK's case).
+
+The answer is for E's core, which is E shrunk by its rolling radius (geometry.py), and
+B's core, the hull of its points: res = [U - r, n, pa, pb] as boxell's.
+
+Measured on bench/deep_pairs.py's 1,016 deep ellipsoid-convex pairs by the prototype
+of session 41 (bench/hull_fan.py, removed once this module took its place; it is in
+commit 1932f47): every pair decided, the depth within 9.5e-9 * scale and the normal
+within 4e-4 rad of GJK/EPA's (EPA's own tolerance).  Figures of time: BENCHMARKS.md.
+"""
+import math
+
+import numpy as np
+
+from .constants import CONVEX, ELLIPSOID, P_FAN_EDGES, P_FAN_FACES, P_FAN_VERTS, P_ROLL
+from .geometry import borrow_args
+from .jit import borrow, njit_inline, njit_kernel
+
+HE_ITERS = 60          # cap of every 1-D root search
+HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
+HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
+HE_SUPPORT_TOL = 1e-12  # a foot counts if B's support along -n is within this * scale
+HE_POSE = 0            # scratch rows (ellipsoid_hull_depth's ``rows``): the hull's pose
+HE_V = 4               # ... its points in E's frame (FAN_MAX_POINTS rows)
+HE_FACES = HE_V + 64   # ... per face E's support point, n and (f, offset, 0)
+HE_ROWS = HE_FACES + 3 * 128
+
+
+@njit_inline
+def fan_stored(code, prm):
+    """Whether the shape is a hull with its normal fan stored (hull.fan_rows)."""
+    return code == CONVEX and prm[P_FAN_FACES] > 0.0
+
+
+@njit_inline
+def ellipsoid_hull_pair(sa, sb):
+    """An ellipsoid and a hull with its fan, either order."""
+    return ((sa[0] == ELLIPSOID and fan_stored(sb[0], sb[1]))
+            or (sb[0] == ELLIPSOID and fan_stored(sa[0], sa[1])))
+
+
+@njit_inline
+def _phi(l0, l1, l2, w0, w1, w2, t):
+    """phi(t) = sum w_i / (l_i + t)^2 - 1 and its first two derivatives."""
+    a, b, c = 1.0 / (l0 + t), 1.0 / (l1 + t), 1.0 / (l2 + t)
+    a2, b2, c2 = w0 * a * a, w1 * b * b, w2 * c * c
+    return (a2 + b2 + c2 - 1.0, -2.0 * (a2 * a + b2 * b + c2 * c),
+            6.0 * (a2 * a * a + b2 * b * b + c2 * c * c))
+
+
+@njit_inline
+def _newton_from(l0, l1, l2, w0, w1, w2, t):
+    """Newton's method on phi from t with phi(t) >= 0 on a convex, monotone branch of
+    phi: the steps move toward the root and never pass it (no bracket needed).
+    Returns (root, converged)."""
+    for _ in range(HE_ITERS):
+        r = _phi(l0, l1, l2, w0, w1, w2, t)
+        if not r[0] > 0.0:
+            return t, True
+        tn = t - r[0] / r[1]
+        if abs(tn - t) <= HE_ROOT_RTOL * (abs(t) + l0):
+            return tn, True
+        t = tn
+    return t, False
+
+
+@njit_inline
+def _root_right(l0, l1, l2, w0, w1, w2):
+    """The root right of the pole -l0 (l0 the least): phi is convex and decreasing
+    there, and >= 0 at -l0 + sqrt(w0) (its first term alone is 1 there)."""
+    return _newton_from(l0, l1, l2, w0, w1, w2, -l0 + math.sqrt(w0))
+
+
+@njit_kernel
+def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
+    """The roots of phi between the poles -l1 and -l0 (phi convex, +inf at both): 0 or
+    2, written to out[k], out[k + 1]; returns the count, -1 when undecided."""
+    gap = l1 - l0
+    # with the third term dropped phi is no larger, and that one's least value is
+    # (w0^1/3 + w1^1/3)^3 / gap^2 - 1: no root if it is > 0 ((.)^3 >= w0 + w1 first)
+    if w0 + w1 > gap * gap:
+        return 0
+    c0, c1 = np.cbrt(w0), np.cbrt(w1)
+    if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
+        return 0
+    # Newton's method on phi' (increasing) from the two-term minimiser, in the bracket,
+    # until a point with phi <= 0 (then two roots) or a proof that phi > 0 (none)
+    lo = -l1 + 1e-9 * gap
+    hi = -l0 - 1e-9 * gap
+    t = -l0 - gap * c0 / (c0 + c1)
+    found = False
+    for _ in range(HE_ITERS):
+        r = _phi(l0, l1, l2, w0, w1, w2, t)
+        if not r[0] > 0.0:
+            found = True
+            break
+        if r[1] < 0.0:
+            lo = t
+        else:
+            hi = t
+        # phi convex: its least value (in [lo, hi]) is >= phi(t) - |phi'(t)| (hi - lo)
+        if r[0] - abs(r[1]) * (hi - lo) > 0.0:
+            return 0
+        tn = t - r[1] / r[2]
+        if not (lo < tn < hi):
+            tn = 0.5 * (lo + hi)
+        if abs(tn - t) <= HE_DMIN_RTOL * abs(t):
+            return -1                   # a minimum too close to 0 to tell
+        t = tn
+    if not found:
+        return -1
+    # phi(t) <= 0: t lies between the roots.  phi >= 0 at s0 = -l1 + sqrt(w1) and at
+    # s1 = -l0 - sqrt(w0) (a term alone is 1 there); if s0 < t < s1, they lie beyond
+    # the roots, and phi, convex, is monotone from each to its root
+    s0 = -l1 + math.sqrt(w1)
+    s1 = -l0 - math.sqrt(w0)
+    if not (s0 < t < s1):
+        return -1
+    r0, ok0 = _newton_from(l0, l1, l2, w0, w1, w2, s0)
+    r1, ok1 = _newton_from(l0, l1, l2, w0, w1, w2, s1)
+    if not (ok0 and ok1):
+        return -1
+    out[k], out[k + 1] = r0, r1
+    return 2
+
+
+@njit_inline
+def _flat(verts, row, q):
+    """Value q of the flat run of values stored three to a row from ``row`` on."""
+    return verts[row + q // 3, q % 3]
+
+
+@njit_inline
+def _h_minus(V, verts, flat, nf, nv, nx, ny, nz):
+    """h_B(-n): the largest -n . v over the hull's vertices (their indices, nv of them,
+    at value nf of the flat run from row ``flat``; V their positions in E's frame)."""
+    best = -np.inf
+    for i in range(nv):
+        u = int(_flat(verts, flat, nf + i))
+        s = -(nx * V[u, 0] + ny * V[u, 1] + nz * V[u, 2])
+        if s > best:
+            best = s
+    return best
+
+
+@njit_inline
+def _sinus_min(wx, wy, wz, px, py, pz, qx, qy, qz):
+    """min over the great-circle arc from unit p to unit q (angle < pi) of w . n."""
+    a = wx * px + wy * py + wz * pz
+    b = wx * qx + wy * qy + wz * qz
+    m = min(a, b)
+    # the arc's plane normal c = p x q; -w's projection in the arc?
+    cx, cy, cz = py * qz - pz * qy, pz * qx - px * qz, px * qy - py * qx
+    cc = cx * cx + cy * cy + cz * cz
+    if not cc > 0.0:
+        return m
+    k = (wx * cx + wy * cy + wz * cz) / cc
+    ux, uy, uz = -(wx - k * cx), -(wy - k * cy), -(wz - k * cz)
+    uu = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if not uu > 0.0:
+        return m
+    # u in the arc: p x u and u x q along c
+    s1 = cx * (py * uz - pz * uy) + cy * (pz * ux - px * uz) + cz * (px * uy - py * ux)
+    s2 = cx * (uy * qz - uz * qy) + cy * (uz * qx - ux * qz) + cz * (ux * qy - uy * qx)
+    if s1 >= 0.0 and s2 >= 0.0:
+        return min(m, -uu)
+    return m
+
+
+@njit_kernel
+def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
+    """The exact depth of an ellipsoid's core and a hull with its fan stored (either
+    order; B's pose r_ab, t_ab in A's frame), by the module notes.  ``rows`` (>= HE_ROWS,
+    3) and ``roots`` (>= 3,) are scratch.  Returns True with res[:10] = [h, n (3), pa (3),
+    pb (3)] in A's frame (h the cores' depth, n from A to B, pa and pb on the two cores,
+    pb - pa == -h n), or False (undecided: apart, or a case the notes leave to GJK/EPA)
+    with res untouched."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    rows, roots, res = borrow(rows), borrow(roots), borrow(res)
+    side = 0 if sa[0] == ELLIPSOID else 1
+    ell = sa[1] if side == 0 else sb[1]
+    hull = sb if side == 0 else sa
+    prm, v0, vn = hull[1], hull[2], hull[3]
+    nf, ne, nvx = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
+    if vn > HE_FACES - HE_V or nf > (HE_ROWS - HE_FACES) // 3:
+        return False
+    fnr = v0 + vn               # the face normals' rows, then the flat run
+    flat = fnr + nf             # offsets [0, nf), vertices [nf, nf + nvx), edges after
+    fe = nf + nvx
+    # the hull's pose in E's frame
+    R = rows[HE_POSE:HE_POSE + 3]
+    t = rows[HE_POSE + 3]
+    for i in range(3):
+        if side == 0:
+            t[i] = t_ab[i]
+            for j in range(3):
+                R[i, j] = r_ab[i, j]
+        else:
+            t[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
+            for j in range(3):
+                R[i, j] = r_ab[j, i]
+    a0, a1, a2 = ell[0] ** 2, ell[1] ** 2, ell[2] ** 2
+    amin = math.sqrt(min(a0, min(a1, a2)))
+    amax = math.sqrt(max(a0, max(a1, a2)))
+    rroll = amin * amin / amax
+    i0_, i1_, i2_ = 1.0 / a0, 1.0 / a1, 1.0 / a2
+    V = rows[HE_V:HE_V + vn]
+    S = rows[HE_FACES:HE_FACES + nf]
+    N = rows[HE_FACES + nf:HE_FACES + 2 * nf]
+    Q = rows[HE_FACES + 2 * nf:HE_FACES + 3 * nf]
+    pts = verts[v0:v0 + vn]
+    # L: a lower bound on the depth, the largest (1 - rho) a_min of an inside vertex,
+    # raised to a vertex's exact depth in E (its foot right of the pole) once found
+    L = 0.0
+    for i in range(nvx):
+        u = int(_flat(verts, flat, nf + i))
+        for c in range(3):
+            V[u, c] = R[c, 0] * pts[u, 0] + R[c, 1] * pts[u, 1] + R[c, 2] * pts[u, 2] + t[c]
+        rho = math.sqrt(V[u, 0] * V[u, 0] * i0_ + V[u, 1] * V[u, 1] * i1_
+                        + V[u, 2] * V[u, 2] * i2_)
+        if rho < 1.0:
+            L = max(L, (1.0 - rho) * amin)
+    tol = HE_SUPPORT_TOL * scale
+    U = np.inf
+    bx = by = bz = 0.0
+    cin = np.inf        # the least offset of B's face planes from E's centre
+    for f in range(nf):
+        fx, fy, fz = verts[fnr + f, 0], verts[fnr + f, 1], verts[fnr + f, 2]
+        mx = R[0, 0] * fx + R[0, 1] * fy + R[0, 2] * fz
+        my = R[1, 0] * fx + R[1, 1] * fy + R[1, 2] * fz
+        mz = R[2, 0] * fx + R[2, 1] * fy + R[2, 2] * fz
+        hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
+        off = _flat(verts, flat, f) + mx * t[0] + my * t[1] + mz * t[2]
+        cin = min(cin, off)
+        val = hA + off
+        if not val > 0.0:
+            return False        # E wholly beyond the face's plane (or NaN): apart
+        # n = -m; E's support point there, -L m / hA
+        ih = 1.0 / hA
+        S[f, 0], S[f, 1], S[f, 2] = -a0 * mx * ih, -a1 * my * ih, -a2 * mz * ih
+        N[f, 0], N[f, 1], N[f, 2] = -mx, -my, -mz
+        Q[f, 0], Q[f, 1] = val, off
+        if val < U:
+            U = val
+            bx, by, bz = -mx, -my, -mz
+    # the pruning below skips negative feet, so the pair must be proved to overlap: a
+    # hull vertex inside E (L > 0) or E's centre inside B now, else the midpoint of
+    # the answer's witnesses in both at the end
+    proved = L > 0.0 or cin > 0.0
+    for e in range(ne):
+        q = fe + 4 * e
+        ia, ib = int(_flat(verts, flat, q)), int(_flat(verts, flat, q + 1))
+        f1, f2 = int(_flat(verts, flat, q + 2)), int(_flat(verts, flat, q + 3))
+        vx, vy, vz = V[ia, 0], V[ia, 1], V[ia, 2]
+        # the arc's ends n1, n2, f there, and E's support points there less v
+        n1x, n1y, n1z = N[f1, 0], N[f1, 1], N[f1, 2]
+        n2x, n2y, n2z = N[f2, 0], N[f2, 1], N[f2, 2]
+        g1, g2 = Q[f1, 0], Q[f2, 0]
+        s1x, s1y, s1z = S[f1, 0] - vx, S[f1, 1] - vy, S[f1, 2] - vz
+        s2x, s2y, s2z = S[f2, 0] - vx, S[f2, 1] - vy, S[f2, 2] - vz
+        # tangent planes of f at the arc's ends (s_i . n), over the chord
+        c12 = s1x * n2x + s1y * n2y + s1z * n2z
+        c21 = s2x * n1x + s2y * n1y + s2z * n1z
+        den = (g1 - c21) + (g2 - c12)
+        if den > 0.0:
+            al = (g2 - c12) / den
+            lb = al * g1 + (1.0 - al) * c12
+        else:
+            lb = min(g1, g2)
+        if lb >= U - tol:
+            continue
+        # tighter: the larger of the two planes over the arc itself, each on its side
+        # of their crossing
+        d1, d2 = g1 - c21, c12 - g2
+        if d1 >= 0.0 and d2 <= 0.0 and d1 - d2 > 0.0:
+            cx, cy, cz = d1 * n2x - d2 * n1x, d1 * n2y - d2 * n1y, d1 * n2z - d2 * n1z
+            cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+            cx, cy, cz = cx / cn, cy / cn, cz / cn
+            lb = min(_sinus_min(s1x, s1y, s1z, n1x, n1y, n1z, cx, cy, cz),
+                     _sinus_min(s2x, s2y, s2z, cx, cy, cz, n2x, n2y, n2z))
+            if lb >= U - tol:
+                continue
+        # the 2-D problem in the plane normal to the edge: basis p = n1, q = e x p
+        ex, ey, ez = V[ib, 0] - vx, V[ib, 1] - vy, V[ib, 2] - vz
+        el = math.sqrt(ex * ex + ey * ey + ez * ez)
+        ex, ey, ez = ex / el, ey / el, ez / el
+        px, py, pz = n1x, n1y, n1z
+        qx, qy, qz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
+        g11 = a0 * px * px + a1 * py * py + a2 * pz * pz
+        g12 = a0 * px * qx + a1 * py * qy + a2 * pz * qz
+        g22 = a0 * qx * qx + a1 * qy * qy + a2 * qz * qz
+        tr_ = 0.5 * (g11 + g22)
+        dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
+        lam0, lam1 = tr_ - dd, tr_ + dd
+        if not lam1 - lam0 > 1e-9 * lam1:
+            return False
+        # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux)
+        if abs(g11 - lam0) > abs(g22 - lam0):
+            ux, uy = -g12, g11 - lam0
+        else:
+            ux, uy = g22 - lam0, -g12
+        un = math.sqrt(ux * ux + uy * uy)
+        ux, uy = ux / un, uy / un
+        # the point P: v's projection (on the arc f(n) = h_E(n) - n . v)
+        wp, wq = px * vx + py * vy + pz * vz, qx * vx + qy * vy + qz * vz
+        P0 = ux * wp + uy * wq
+        P1 = -uy * wp + ux * wq
+        w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
+        small = 1e-24 * lam1 * scale * scale
+        if not (w0 > small and w1 > small):
+            return False
+        k = 0
+        if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
+            roots[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
+            if not ok:
+                return False
+            k = 1
+        if lam0 / math.sqrt(lam1) < U and abs(P0) * lam1 < U * (lam1 - lam0):
+            km = _roots_mid(lam0, lam1, lam1, w0, w1, 0.0, roots, k)
+            if km < 0:
+                return False
+            k += km
+        for r in range(k):
+            tt = roots[r]
+            N0, N1 = P0 / (lam0 + tt), P1 / (lam1 + tt)
+            nn = math.sqrt(N0 * N0 + N1 * N1)
+            val = -tt * nn
+            if not val < U:
+                continue
+            c0, c1 = N0 / nn, N1 / nn
+            ap, aq = ux * c0 - uy * c1, uy * c0 + ux * c1
+            nx, ny, nz = ap * px + aq * qx, ap * py + aq * qy, ap * pz + aq * qz
+            # in the edge's arc: B's support along -n attained at v (within tol)
+            if (_h_minus(V, verts, flat, nf, nvx, nx, ny, nz)
+                    > -(nx * vx + ny * vy + nz * vz) + tol):
+                continue
+            U = val
+            bx, by, bz = nx, ny, nz
+    # the axes sorted by their squared lengths
+    lam = (a0, a1, a2)
+    i0, i1, i2 = 0, 1, 2
+    if lam[i0] > lam[i1]:
+        i0, i1 = i1, i0
+    if lam[i1] > lam[i2]:
+        i1, i2 = i2, i1
+    if lam[i0] > lam[i1]:
+        i0, i1 = i1, i0
+    l0, l1, l2 = lam[i0], lam[i1], lam[i2]
+    if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
+        return False
+    for i in range(nvx):
+        u = int(_flat(verts, flat, nf + i))
+        x = (V[u, 0], V[u, 1], V[u, 2])
+        rho = math.sqrt(x[0] * x[0] * i0_ + x[1] * x[1] * i1_ + x[2] * x[2] * i2_)
+        j0 = rho < 1.0 and (1.0 - rho) * amax >= L - tol
+        # a root between the poles is a foot y on the far side along the least axis:
+        # |y - x| >= |y_0| + |x_0| > |x_0| l1 / (l1 - l0)
+        mid = (l0 / math.sqrt(l2) < U and abs(x[i0]) * l1 < U * (l1 - l0)
+               and (rho < 1.0 or 2.0 * rroll + (rho - 1.0) * amin < U))
+        if not (j0 or mid):
+            continue
+        P0, P1, P2 = x[i0], x[i1], x[i2]
+        w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
+        small = 1e-24 * l2 * scale * scale
+        if not (w0 > small and w1 > small and w2 > small):
+            return False
+        k = 0
+        if j0:
+            roots[0], ok = _root_right(l0, l1, l2, w0, w1, w2)
+            if not ok:
+                return False
+            k = 1
+        if mid:
+            km = _roots_mid(l0, l1, l2, w0, w1, w2, roots, k)
+            if km < 0:
+                return False
+            k += km
+        for r in range(k):
+            tt = roots[r]
+            N0, N1, N2 = P0 / (l0 + tt), P1 / (l1 + tt), P2 / (l2 + tt)
+            nn = math.sqrt(N0 * N0 + N1 * N1 + N2 * N2)
+            val = -tt * nn
+            if r == 0 and j0:
+                L = max(L, val)         # the vertex's depth in E: the depth is >= it
+            if not (val < U and val >= L - tol):
+                continue
+            c = (N0 / nn, N1 / nn, N2 / nn)
+            nx = c[0] if i0 == 0 else (c[1] if i1 == 0 else c[2])
+            ny = c[0] if i0 == 1 else (c[1] if i1 == 1 else c[2])
+            nz = c[0] if i0 == 2 else (c[1] if i1 == 2 else c[2])
+            if (_h_minus(V, verts, flat, nf, nvx, nx, ny, nz)
+                    > -(nx * x[0] + ny * x[1] + nz * x[2]) + tol):
+                continue
+            U = val
+            bx, by, bz = nx, ny, nz
+    hA = math.sqrt(a0 * bx * bx + a1 * by * by + a2 * bz * bz)
+    ih = 1.0 / hA
+    # E's support point along n, and B's, U back along n
+    ex, ey, ez = a0 * bx * ih, a1 * by * ih, a2 * bz * ih
+    if not proved:
+        # the witnesses' midpoint in both
+        qx, qy, qz = ex - 0.5 * U * bx, ey - 0.5 * U * by, ez - 0.5 * U * bz
+        if not qx * qx * i0_ + qy * qy * i1_ + qz * qz * i2_ <= 1.0:
+            return False
+        for f in range(nf):
+            if -(N[f, 0] * qx + N[f, 1] * qy + N[f, 2] * qz) > Q[f, 1]:
+                return False
+    if not math.isfinite(U):
+        return False
+    roll = ell[P_ROLL]
+    if side == 0:
+        res[0] = U - roll
+        res[1], res[2], res[3] = bx, by, bz
+        res[4], res[5], res[6] = ex - roll * bx, ey - roll * by, ez - roll * bz
+        res[7], res[8], res[9] = ex - U * bx, ey - U * by, ez - U * bz
+        return True
+    # back to A's (the hull's) frame: n from A to B is -r_ab n
+    hx, hy, hz = ex - U * bx, ey - U * by, ez - U * bz
+    res[0] = U - roll
+    for c in range(3):
+        nA = -(r_ab[c, 0] * bx + r_ab[c, 1] * by + r_ab[c, 2] * bz)
+        res[1 + c] = nA
+        res[4 + c] = r_ab[c, 0] * hx + r_ab[c, 1] * hy + r_ab[c, 2] * hz + t_ab[c]
+        res[7 + c] = (r_ab[c, 0] * ex + r_ab[c, 1] * ey + r_ab[c, 2] * ez + t_ab[c]
+                      + roll * nA)
+    return True

@@ -1,0 +1,134 @@
+"""The normal fan of a small hull (hull.fan_rows) and the exact ellipsoid-hull depth over
+it (kernels/hullell.py), against GJK/EPA on the same points without the fan (a table
+built with prune=False stores none) on seeded random pairs, both orders, with margins.
+coal checks the same path in test_gjk_epa.py (test_against_coal_random: its ellipsoid-
+convex pairs go through hullell whenever the cores overlap)."""
+import numpy as np
+import pytest
+
+from bench.common import pair_cases, relative_poses
+from mkcollision_ros.hull import FAN_MAX_POINTS, fan_rows
+from mkcollision_ros.kernels import constants as C
+from mkcollision_ros.kernels.gjk_epa import gjk_epa
+from mkcollision_ros.kernels.hullell import HE_ROWS, ellipsoid_hull_depth
+from mkcollision_ros.kernels.narrowphase import collide_batch
+from mkcollision_ros.shapes import build_table, point_count, shape_row
+
+CUBE = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+
+
+def _fan(points):
+    """(faces, edges, vertices, normals, offsets, vertex ids, edges (E, 4)) unpacked."""
+    nf, ne, nv, rows = fan_rows(points)
+    flat = rows[nf:].ravel()
+    return (nf, ne, nv, rows[:nf], flat[:nf], flat[nf:nf + nv].astype(int),
+            flat[nf + nv:nf + nv + 4 * ne].astype(int).reshape(-1, 4))
+
+
+def test_fan_counts_of_polytopes_and_degenerate_sets():
+    assert _fan(CUBE)[:3] == (6, 12, 8)                      # coplanar corners: 6 faces
+    assert _fan(np.concatenate([CUBE, CUBE[:3], [[0.0, 0.0, 0.0]]]))[:3] == (6, 12, 8)
+    assert _fan(np.eye(3).tolist() + [[0.0, 0.0, 0.0]])[:3] == (4, 6, 4)
+    flat = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]
+    line = [[float(k), 0.0, 0.0] for k in range(5)]
+    rng = np.random.default_rng(3)
+    many = rng.normal(size=(FAN_MAX_POINTS + 1, 3))
+    for pts in (flat, line, many, CUBE[:3]):
+        assert fan_rows(pts)[0] == 0
+    # the table stores it after the points; point_count still finds the points
+    code, prm, rows = shape_row({"type": "convex", "points": CUBE.tolist()})
+    assert prm[C.P_FAN_FACES] == 6 and point_count(code, prm, rows) == 8
+    assert np.array_equal(rows[:8], CUBE)
+    code, prm, rows = shape_row({"type": "convex", "points": flat})
+    assert prm[C.P_FAN_FACES] == 0 and point_count(code, prm, rows) == 4
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fan_is_the_hulls_boundary(seed):
+    rng = np.random.default_rng(seed)
+    P = rng.normal(size=(int(rng.integers(5, FAN_MAX_POINTS + 1)), 3)) * rng.uniform(
+        0.1, 3.0, 3)
+    nf, ne, nv, FN, FO, VX, E = _fan(P)
+    assert nf > 0 and nv - ne + nf == 2
+    assert np.allclose(np.linalg.norm(FN, axis=1), 1.0)
+    size = np.linalg.norm(P.max(0) - P.min(0))
+    assert np.allclose((P @ FN.T).max(0), FO, rtol=0, atol=1e-12 * size)
+    # every point attaining a support maximum is a listed vertex, and every vertex is
+    # the only maximum along the sum of its faces' normals (inside its normal cone)
+    d = rng.normal(size=(20000, 3))
+    assert set(np.argmax(P @ d.T, axis=0)) <= set(VX)
+    on = np.abs(P @ FN.T - FO) < 1e-9 * size
+    for u in VX:
+        s = P @ FN[on[u]].sum(0)
+        assert np.argmax(s) == u and np.sum(s >= s[u] - 1e-9 * size) == 1
+    for a, b, f, g in E:
+        for u in (a, b):
+            assert abs(P[u] @ FN[f] - FO[f]) < 1e-9 * size
+            assert abs(P[u] @ FN[g] - FO[g]) < 1e-9 * size
+
+
+def _pair_runs(n, seed, margin, swap):
+    """Per case: (overlap by GJK/EPA, decided, fan depth, GJK depth, fan normal, GJK
+    normal, witness residual, scale), the kernel called directly."""
+    shapes, _, _, pos, quat = pair_cases("ellipsoid", "convex", n, seed=seed)
+    for s in shapes:
+        s["margin"] = margin
+    fan, plain = build_table(shapes), build_table(shapes, prune=False)
+    assert np.all(fan.params[1::2, C.P_FAN_FACES] > 0)
+    assert np.all(plain.params[1::2, C.P_FAN_FACES] == 0)
+    rows, roots, res, out = np.zeros((HE_ROWS, 3)), np.zeros(8), np.zeros(10), np.zeros(
+        C.OUT_SIZE)
+    runs = []
+    for k in range(n):
+        ia, ib = (2 * k + 1, 2 * k) if swap else (2 * k, 2 * k + 1)
+        R, T = relative_poses(pos[[ia, ib]], quat[[ia, ib]])
+        sa, sb, qa, qb = [(t.codes[i], t.params[i], t.vrange[i, 0], t.vrange[i, 1])
+                          for t in (fan, plain) for i in (ia, ib)]
+        scale = fan.params[ia, C.P_RADIUS] + fan.params[ib, C.P_RADIUS]
+        st = gjk_epa(qa, qb, plain.verts, R[0], T[0], out)
+        res[:] = np.nan
+        dec = ellipsoid_hull_depth(sa, sb, fan.verts, R[0], T[0], scale, rows, roots, res)
+        ell = ib if swap else ia
+        full = res[0] + fan.params[ell, C.P_ROLL] + 2 * margin     # both margins
+        runs.append((st == C.ST_PENETRATING, dec, full, -out[C.OUT_DIST], res[1:4].copy(),
+                     out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
+                     np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale))
+    return runs
+
+
+@pytest.mark.parametrize("swap", [False, True])
+@pytest.mark.parametrize("margin", [0.0, 0.04])
+def test_exact_depth_matches_gjk_epa(swap, margin):
+    runs = _pair_runs(300, 11 + swap + int(100 * margin), margin, swap)
+    # the kernel is for the ellipsoid and the hull without their margins
+    over = [r for r in runs if r[0] and r[3] > 2 * margin + 1e-9 * r[7]]
+    decided = [r for r in runs if r[1]]
+    assert len(over) > 100
+    # it decides only overlapping pairs, nearly all of them (the rest go to GJK/EPA)
+    assert all(r[0] and r[3] > 2 * margin for r in decided)
+    assert len(decided) >= 0.9 * len(over), (len(decided), len(over))
+    for _, _, h, h_ref, n, n_ref, resid, scale in decided:
+        assert abs(h - h_ref) <= 2e-8 * scale
+        assert np.arccos(np.clip(n @ n_ref, -1.0, 1.0)) < 1e-3
+        assert resid <= 1e-12 * scale
+
+
+def test_batch_kernel_takes_the_fan_and_agrees_with_gjk_epa():
+    shapes, fan, pairs, pos, quat = pair_cases("ellipsoid", "convex", 400, seed=21)
+    plain = build_table(shapes, prune=False)
+    outs, sts = [], []
+    for t in (fan, plain):
+        out, st = np.zeros((len(pairs), C.OUT_SIZE)), np.zeros(len(pairs), np.int64)
+        collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat, C.M_AUTO,
+                      np.inf, out, st)
+        outs.append(out)
+        sts.append(st)
+    scale = fan.params[0::2, C.P_RADIUS] + fan.params[1::2, C.P_RADIUS]
+    assert np.all(np.isfinite(outs[0]))
+    deep = outs[1][:, C.OUT_DIST] < -1e-3 * scale
+    assert deep.sum() > 100
+    assert np.array_equal(sts[0][deep], sts[1][deep])
+    assert np.all(np.abs(outs[0][deep, 0] - outs[1][deep, 0]) <= 2e-8 * scale[deep])
+    # the fan answered (one step) where GJK/EPA took many
+    fast = outs[0][deep, C.OUT_ITERS] == 1
+    assert fast.mean() > 0.9 and np.all(outs[1][deep, C.OUT_ITERS] > 1)

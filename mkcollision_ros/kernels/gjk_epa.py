@@ -196,7 +196,8 @@ from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_de
                      segment_cylinder_depth, sides_crossing)
 from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core_xyz,
                        shape_scale)
-from .hullell import HE_ROWS, ellipsoid_hull_depth, ellipsoid_hull_pair
+from .hullell import (HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED, ellipsoid_hull_depth,
+                      ellipsoid_hull_pair)
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -2726,6 +2727,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
     res = ws[1][_RES:_RES + 10]
+    fan = HE_UNDECIDED
     if sa[0] == CYLINDER or sb[0] == CYLINDER:
         # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl), or a
         # box (boxcyl: the exact depth in closed form): cores that overlap get their
@@ -2757,10 +2759,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         if exact or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     elif ellipsoid_hull_pair(sa, sb):
-        # an ellipsoid and a small hull with its normal fan stored (hullell): the cores'
-        # exact depth when they are proved to overlap; else GJK and EPA
-        if ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, fs[_V:_V + HE_ROWS],
-                                fv[_FD:_FD + 8], res):
+        # an ellipsoid and a small hull with its normal fan stored (hullell): the exact
+        # depth when a cheap test proves the pair overlapping; without that proof, again
+        # after GJK once it finds the cores overlapping (below, in place of EPA)
+        fan = ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False,
+                                   fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+        if fan == HE_EXACT:
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
@@ -2823,6 +2827,10 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             if (vn * vn - _dot(v, w)) / vn > 1e-6 * scale:
                 st = ST_FAILED
         return st
+    if fan == HE_UNPROVED and ellipsoid_hull_depth(
+            sa, sb, verts, r_ab, t_ab, scale, True, fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8],
+            res) == HE_EXACT:
+        return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.
     if n < 4:

@@ -47,11 +47,13 @@ faces'):
     before any search.
 
 The pruning skips the negative feet of vertices outside E, so it holds only if E and B
-overlap; the kernel proves that: a hull vertex inside E or E's centre inside B, else
-the midpoint of the answer's witness points inside both (checked at the end: the answer
-found under the assumption is then exact).  Else, and on near-degenerate input (equal
-semi-axes, a point on an axis plane, a search that does not converge), it returns
-False.  A face plane with E wholly beyond it ends the call at once (apart: GJK's case).
+overlap.  The kernel proves that before anything else where it is cheap: a hull vertex
+inside E or E's centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases).
+Else gjk_epa_ws runs GJK first and calls it again once GJK has found the cores
+overlapping, in place of EPA: pairs apart then cost the vertices' transform and a pass
+over the face planes only.  On near-degenerate input (equal semi-axes, a point on an
+axis plane, a search that does not converge) it decides nothing, and a face plane with
+E wholly beyond it ends the call at once (apart: GJK's case).
 
 The answer is for E's core, which is E shrunk by its rolling radius (geometry.py), and
 B's core, the hull of its points: res = [U - r, n, pa, pb] as boxell's.
@@ -73,10 +75,13 @@ HE_ITERS = 60          # cap of every 1-D root search
 HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
 HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
 HE_SUPPORT_TOL = 1e-12  # a foot counts if B's support along -n is within this * scale
-HE_POSE = 0            # scratch rows (ellipsoid_hull_depth's ``rows``): the hull's pose
-HE_V = 4               # ... its points in E's frame (FAN_MAX_POINTS rows)
+HE_V = 0               # scratch rows (ellipsoid_hull_depth's ``rows``): the hull's points
+                       # in E's frame (FAN_MAX_POINTS rows)
 HE_FACES = HE_V + 64   # ... per face E's support point, n and (f, offset, 0)
 HE_ROWS = HE_FACES + 3 * 128
+HE_EXACT = 1           # ellipsoid_hull_depth's outcomes: the depth, exact
+HE_UNPROVED = 0        # ... nothing, for want of a proof that the pair overlaps
+HE_UNDECIDED = -1      # ... nothing (apart, or a case left to GJK/EPA)
 
 
 @njit_inline
@@ -178,18 +183,12 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
 
 
 @njit_inline
-def _flat(verts, row, q):
-    """Value q of the flat run of values stored three to a row from ``row`` on."""
-    return verts[row + q // 3, q % 3]
-
-
-@njit_inline
-def _h_minus(V, verts, flat, nf, nv, nx, ny, nz):
+def _h_minus(V, fl, nf, nv, nx, ny, nz):
     """h_B(-n): the largest -n . v over the hull's vertices (their indices, nv of them,
     at value nf of the flat run from row ``flat``; V their positions in E's frame)."""
     best = -np.inf
     for i in range(nv):
-        u = int(_flat(verts, flat, nf + i))
+        u = int(fl[nf + i])
         s = -(nx * V[u, 0] + ny * V[u, 1] + nz * V[u, 2])
         if s > best:
             best = s
@@ -221,13 +220,15 @@ def _sinus_min(wx, wy, wz, px, py, pz, qx, qy, qz):
 
 
 @njit_kernel
-def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
+def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots, res):
     """The exact depth of an ellipsoid's core and a hull with its fan stored (either
-    order; B's pose r_ab, t_ab in A's frame), by the module notes.  ``rows`` (>= HE_ROWS,
-    3) and ``roots`` (>= 3,) are scratch.  Returns True with res[:10] = [h, n (3), pa (3),
-    pb (3)] in A's frame (h the cores' depth, n from A to B, pa and pb on the two cores,
-    pb - pa == -h n), or False (undecided: apart, or a case the notes leave to GJK/EPA)
-    with res untouched."""
+    order; B's pose r_ab, t_ab in A's frame), by the module notes.  ``overlap``: the
+    caller has proved that the pair overlaps (GJK on the cores).  ``rows`` (>= HE_ROWS,
+    3) and ``roots`` (>= 3,) are scratch.  Returns HE_EXACT with res[:10] = [h, n (3),
+    pa (3), pb (3)] in A's frame (h the cores' depth, n from A to B, pa and pb on the
+    two cores, pb - pa == -h n); HE_UNPROVED (without ``overlap``, when neither a hull
+    vertex inside E nor E's centre inside B proves the overlap) or HE_UNDECIDED
+    otherwise, with res untouched."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     rows, roots, res = borrow(rows), borrow(roots), borrow(res)
     side = 0 if sa[0] == ELLIPSOID else 1
@@ -236,22 +237,25 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
     prm, v0, vn = hull[1], hull[2], hull[3]
     nf, ne, nvx = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
     if vn > HE_FACES - HE_V or nf > (HE_ROWS - HE_FACES) // 3:
-        return False
+        return HE_UNDECIDED
     fnr = v0 + vn               # the face normals' rows, then the flat run
     flat = fnr + nf             # offsets [0, nf), vertices [nf, nf + nvx), edges after
     fe = nf + nvx
-    # the hull's pose in E's frame
-    R = rows[HE_POSE:HE_POSE + 3]
-    t = rows[HE_POSE + 3]
-    for i in range(3):
-        if side == 0:
-            t[i] = t_ab[i]
-            for j in range(3):
-                R[i, j] = r_ab[i, j]
-        else:
-            t[i] = -(r_ab[0, i] * t_ab[0] + r_ab[1, i] * t_ab[1] + r_ab[2, i] * t_ab[2])
-            for j in range(3):
-                R[i, j] = r_ab[j, i]
+    fl = verts[flat:flat + (nf + nvx + 4 * ne + 2) // 3].reshape(-1)
+    # the hull's pose in E's frame, in scalars (stores into the scratch rows could
+    # alias an array, and the compiler would reload it after each)
+    if side == 0:
+        r00, r01, r02 = r_ab[0, 0], r_ab[0, 1], r_ab[0, 2]
+        r10, r11, r12 = r_ab[1, 0], r_ab[1, 1], r_ab[1, 2]
+        r20, r21, r22 = r_ab[2, 0], r_ab[2, 1], r_ab[2, 2]
+        t0, t1, t2 = t_ab[0], t_ab[1], t_ab[2]
+    else:
+        r00, r01, r02 = r_ab[0, 0], r_ab[1, 0], r_ab[2, 0]
+        r10, r11, r12 = r_ab[0, 1], r_ab[1, 1], r_ab[2, 1]
+        r20, r21, r22 = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+        t0 = -(r00 * t_ab[0] + r01 * t_ab[1] + r02 * t_ab[2])
+        t1 = -(r10 * t_ab[0] + r11 * t_ab[1] + r12 * t_ab[2])
+        t2 = -(r20 * t_ab[0] + r21 * t_ab[1] + r22 * t_ab[2])
     a0, a1, a2 = ell[0] ** 2, ell[1] ** 2, ell[2] ** 2
     amin = math.sqrt(min(a0, min(a1, a2)))
     amax = math.sqrt(max(a0, max(a1, a2)))
@@ -266,44 +270,50 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
     # raised to a vertex's exact depth in E (its foot right of the pole) once found
     L = 0.0
     for i in range(nvx):
-        u = int(_flat(verts, flat, nf + i))
-        for c in range(3):
-            V[u, c] = R[c, 0] * pts[u, 0] + R[c, 1] * pts[u, 1] + R[c, 2] * pts[u, 2] + t[c]
-        rho = math.sqrt(V[u, 0] * V[u, 0] * i0_ + V[u, 1] * V[u, 1] * i1_
-                        + V[u, 2] * V[u, 2] * i2_)
-        if rho < 1.0:
-            L = max(L, (1.0 - rho) * amin)
+        u = int(fl[nf + i])
+        px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
+        x0 = r00 * px + r01 * py + r02 * pz + t0
+        x1 = r10 * px + r11 * py + r12 * pz + t1
+        x2 = r20 * px + r21 * py + r22 * pz + t2
+        V[u, 0], V[u, 1], V[u, 2] = x0, x1, x2
+        rr = x0 * x0 * i0_ + x1 * x1 * i1_ + x2 * x2 * i2_
+        if rr < 1.0:
+            L = max(L, (1.0 - math.sqrt(rr)) * amin)
+    # the pruning below skips negative feet, so the pair must be known to overlap: by
+    # the caller (GJK), a hull vertex inside E (L > 0) or E's centre inside B
+    if not (overlap or L > 0.0):
+        for f in range(nf):
+            fx, fy, fz = verts[fnr + f, 0], verts[fnr + f, 1], verts[fnr + f, 2]
+            off = (fl[f] + (r00 * fx + r01 * fy + r02 * fz) * t0
+                   + (r10 * fx + r11 * fy + r12 * fz) * t1
+                   + (r20 * fx + r21 * fy + r22 * fz) * t2)
+            if not off > 0.0:
+                return HE_UNPROVED
     tol = HE_SUPPORT_TOL * scale
     U = np.inf
     bx = by = bz = 0.0
-    cin = np.inf        # the least offset of B's face planes from E's centre
     for f in range(nf):
         fx, fy, fz = verts[fnr + f, 0], verts[fnr + f, 1], verts[fnr + f, 2]
-        mx = R[0, 0] * fx + R[0, 1] * fy + R[0, 2] * fz
-        my = R[1, 0] * fx + R[1, 1] * fy + R[1, 2] * fz
-        mz = R[2, 0] * fx + R[2, 1] * fy + R[2, 2] * fz
+        mx = r00 * fx + r01 * fy + r02 * fz
+        my = r10 * fx + r11 * fy + r12 * fz
+        mz = r20 * fx + r21 * fy + r22 * fz
         hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
-        off = _flat(verts, flat, f) + mx * t[0] + my * t[1] + mz * t[2]
-        cin = min(cin, off)
+        off = fl[f] + mx * t0 + my * t1 + mz * t2
         val = hA + off
         if not val > 0.0:
-            return False        # E wholly beyond the face's plane (or NaN): apart
+            return HE_UNDECIDED  # E wholly beyond the face's plane, or NaN
         # n = -m; E's support point there, -L m / hA
         ih = 1.0 / hA
         S[f, 0], S[f, 1], S[f, 2] = -a0 * mx * ih, -a1 * my * ih, -a2 * mz * ih
         N[f, 0], N[f, 1], N[f, 2] = -mx, -my, -mz
-        Q[f, 0], Q[f, 1] = val, off
+        Q[f, 0] = val
         if val < U:
             U = val
             bx, by, bz = -mx, -my, -mz
-    # the pruning below skips negative feet, so the pair must be proved to overlap: a
-    # hull vertex inside E (L > 0) or E's centre inside B now, else the midpoint of
-    # the answer's witnesses in both at the end
-    proved = L > 0.0 or cin > 0.0
     for e in range(ne):
         q = fe + 4 * e
-        ia, ib = int(_flat(verts, flat, q)), int(_flat(verts, flat, q + 1))
-        f1, f2 = int(_flat(verts, flat, q + 2)), int(_flat(verts, flat, q + 3))
+        ia, ib = int(fl[q]), int(fl[q + 1])
+        f1, f2 = int(fl[q + 2]), int(fl[q + 3])
         vx, vy, vz = V[ia, 0], V[ia, 1], V[ia, 2]
         # the arc's ends n1, n2, f there, and E's support points there less v
         n1x, n1y, n1z = N[f1, 0], N[f1, 1], N[f1, 2]
@@ -346,7 +356,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
         dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
         lam0, lam1 = tr_ - dd, tr_ + dd
         if not lam1 - lam0 > 1e-9 * lam1:
-            return False
+            return HE_UNDECIDED
         # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux)
         if abs(g11 - lam0) > abs(g22 - lam0):
             ux, uy = -g12, g11 - lam0
@@ -361,17 +371,17 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
         w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
         small = 1e-24 * lam1 * scale * scale
         if not (w0 > small and w1 > small):
-            return False
+            return HE_UNDECIDED
         k = 0
         if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
             roots[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
             if not ok:
-                return False
+                return HE_UNDECIDED
             k = 1
         if lam0 / math.sqrt(lam1) < U and abs(P0) * lam1 < U * (lam1 - lam0):
             km = _roots_mid(lam0, lam1, lam1, w0, w1, 0.0, roots, k)
             if km < 0:
-                return False
+                return HE_UNDECIDED
             k += km
         for r in range(k):
             tt = roots[r]
@@ -384,7 +394,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
             ap, aq = ux * c0 - uy * c1, uy * c0 + ux * c1
             nx, ny, nz = ap * px + aq * qx, ap * py + aq * qy, ap * pz + aq * qz
             # in the edge's arc: B's support along -n attained at v (within tol)
-            if (_h_minus(V, verts, flat, nf, nvx, nx, ny, nz)
+            if (_h_minus(V, fl, nf, nvx, nx, ny, nz)
                     > -(nx * vx + ny * vy + nz * vz) + tol):
                 continue
             U = val
@@ -400,9 +410,9 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
         i0, i1 = i1, i0
     l0, l1, l2 = lam[i0], lam[i1], lam[i2]
     if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
-        return False
+        return HE_UNDECIDED
     for i in range(nvx):
-        u = int(_flat(verts, flat, nf + i))
+        u = int(fl[nf + i])
         x = (V[u, 0], V[u, 1], V[u, 2])
         rho = math.sqrt(x[0] * x[0] * i0_ + x[1] * x[1] * i1_ + x[2] * x[2] * i2_)
         j0 = rho < 1.0 and (1.0 - rho) * amax >= L - tol
@@ -416,17 +426,17 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
         w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
         small = 1e-24 * l2 * scale * scale
         if not (w0 > small and w1 > small and w2 > small):
-            return False
+            return HE_UNDECIDED
         k = 0
         if j0:
             roots[0], ok = _root_right(l0, l1, l2, w0, w1, w2)
             if not ok:
-                return False
+                return HE_UNDECIDED
             k = 1
         if mid:
             km = _roots_mid(l0, l1, l2, w0, w1, w2, roots, k)
             if km < 0:
-                return False
+                return HE_UNDECIDED
             k += km
         for r in range(k):
             tt = roots[r]
@@ -441,7 +451,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
             nx = c[0] if i0 == 0 else (c[1] if i1 == 0 else c[2])
             ny = c[0] if i0 == 1 else (c[1] if i1 == 1 else c[2])
             nz = c[0] if i0 == 2 else (c[1] if i1 == 2 else c[2])
-            if (_h_minus(V, verts, flat, nf, nvx, nx, ny, nz)
+            if (_h_minus(V, fl, nf, nvx, nx, ny, nz)
                     > -(nx * x[0] + ny * x[1] + nz * x[2]) + tol):
                 continue
             U = val
@@ -450,23 +460,15 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
     ih = 1.0 / hA
     # E's support point along n, and B's, U back along n
     ex, ey, ez = a0 * bx * ih, a1 * by * ih, a2 * bz * ih
-    if not proved:
-        # the witnesses' midpoint in both
-        qx, qy, qz = ex - 0.5 * U * bx, ey - 0.5 * U * by, ez - 0.5 * U * bz
-        if not qx * qx * i0_ + qy * qy * i1_ + qz * qz * i2_ <= 1.0:
-            return False
-        for f in range(nf):
-            if -(N[f, 0] * qx + N[f, 1] * qy + N[f, 2] * qz) > Q[f, 1]:
-                return False
     if not math.isfinite(U):
-        return False
+        return HE_UNDECIDED
     roll = ell[P_ROLL]
     if side == 0:
         res[0] = U - roll
         res[1], res[2], res[3] = bx, by, bz
         res[4], res[5], res[6] = ex - roll * bx, ey - roll * by, ez - roll * bz
         res[7], res[8], res[9] = ex - U * bx, ey - U * by, ez - U * bz
-        return True
+        return HE_EXACT
     # back to A's (the hull's) frame: n from A to B is -r_ab n
     hx, hy, hz = ex - U * bx, ey - U * by, ez - U * bz
     res[0] = U - roll
@@ -476,4 +478,4 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, rows, roots, res):
         res[4 + c] = r_ab[c, 0] * hx + r_ab[c, 1] * hy + r_ab[c, 2] * hz + t_ab[c]
         res[7 + c] = (r_ab[c, 0] * ex + r_ab[c, 1] * ey + r_ab[c, 2] * ez + t_ab[c]
                       + roll * nA)
-    return True
+    return HE_EXACT

@@ -387,7 +387,7 @@ def _fan_build(P, FN, FO, EV, VX):
     for f in range(nf):
         for g in range(f + 1, nf):
             common = on[f] & on[g]
-            if common & (common - one) == 0:
+            if common == 0 or common & (common - one) == 0:
                 continue                # fewer than two points on both planes
             cx = FN[f, 1] * FN[g, 2] - FN[f, 2] * FN[g, 1]
             cy = FN[f, 2] * FN[g, 0] - FN[f, 0] * FN[g, 2]

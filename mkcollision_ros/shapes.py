@@ -20,7 +20,9 @@ plane      ``normal: [nx, ny, nz]``, ``offset: d``         the half-space n.x <=
 A convex shape keeps only the points its hull needs: a point strictly inside the hull of
 the others is dropped when the shape is built (mkcollision_ros.hull; no support point
 changes, every pass over the points gets shorter), and a hull of many points is stored in
-groups of nearby points whose bounding balls let the support skip most of them.
+groups of nearby points whose bounding balls let the support skip most of them, one of
+at most 64 points with its faces, edges and vertices (the exact ellipsoid-hull kernel,
+kernels/hullell.py).
 Any shape may add ``margin: m`` (>= 0): the shape grown by a sphere of radius m.
 Invalid input raises ``ValueError`` with a message naming the shape and the key.
 """
@@ -53,7 +55,9 @@ class ShapeTable(NamedTuple):
     vrange int64 (N, 2)    (first vertex, vertex count) in ``verts`` for convex shapes
     verts  float64 (M, 3)  convex hull vertices, body frame, metres; a hull stored in
                            groups (params[i, P_GROUPS] > 0) has two rows per group right
-                           after its vertices (mkcollision_ros.hull.support_groups)
+                           after its vertices (mkcollision_ros.hull.support_groups), a
+                           small hull with its normal fan (params[i, P_FAN_FACES] > 0)
+                           the fan's rows there instead (mkcollision_ros.hull.fan_rows)
     """
     codes: np.ndarray
     params: np.ndarray

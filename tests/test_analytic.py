@@ -11,14 +11,14 @@ import pytest
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.analytic import collide_analytic
 from mkcollision_ros.kernels.geometry import support_full
-from mkcollision_ros.shapes import shape_row
+from mkcollision_ros.shapes import point_count, shape_row
 
 VERTS0 = np.zeros((0, 3))
 
 
 def tup(shape, voff=0):
     code, prm, v = shape_row(shape)
-    return (np.int64(code), prm, np.int64(voff), np.int64(len(v))), v
+    return (np.int64(code), prm, np.int64(voff), np.int64(point_count(code, prm, v))), v
 
 
 def rot(rng):
@@ -271,7 +271,7 @@ def test_plane_against_every_shape(kind):
         # oracle: min over A of (n_b . x_b - d), exact by the support function
         n_a = r @ nrm
         if kind == "convex":
-            x_b = (verts - t) @ r            # rows: r^T (v - t)
+            x_b = (verts[:sa[3]] - t) @ r    # rows: r^T (v - t), the points only
             ref = (x_b @ nrm).min() - shape.get("margin", 0.0) - plane["offset"]
         else:
             ref = coal_dist(shape, plane, r, t)

@@ -17,7 +17,7 @@ from mkcollision_ros.kernels.analytic import collide_analytic
 from mkcollision_ros.kernels.geometry import minkowski_support
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
 from mkcollision_ros.kernels.mpr import mpr
-from mkcollision_ros.shapes import shape_row
+from mkcollision_ros.shapes import point_count, shape_row
 
 KINDS = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex")
 
@@ -59,8 +59,9 @@ def pack(sa_d, sb_d):
     ca, pa, va = shape_row(sa_d)
     cb, pb, vb = shape_row(sb_d)
     verts = np.concatenate([va, vb]).reshape(-1, 3)
-    sa = (np.int64(ca), pa, np.int64(0), np.int64(len(va)))
-    sb = (np.int64(cb), pb, np.int64(len(va)), np.int64(len(vb)))
+    # the points are the first point_count rows (a small hull's fan rows follow them)
+    sa = (np.int64(ca), pa, np.int64(0), np.int64(point_count(ca, pa, va)))
+    sb = (np.int64(cb), pb, np.int64(len(va)), np.int64(point_count(cb, pb, vb)))
     return sa, sb, verts
 
 

@@ -294,14 +294,24 @@ def hull_points(points):
     P = np.ascontiguousarray(points, dtype=np.float64)
     if len(P) <= HULL_MIN_POINTS:
         return P, np.zeros((0, 3))
+    return _cached(_CACHE, P, _pruned_groups)
+
+
+def _pruned_groups(P):
+    keep = hull_keep(P)
+    return support_groups(P if len(keep) == len(P) else P[keep])
+
+
+def _cached(cache, P, build):
+    """build(P), kept in ``cache`` for the last _CACHE_SIZE point sets, keyed by their
+    bytes."""
     key = (P.shape, P.tobytes())
-    hit = _CACHE.get(key)
+    hit = cache.get(key)
     if hit is None:
-        keep = hull_keep(P)
-        hit = support_groups(P if len(keep) == len(P) else P[keep])
-        if len(_CACHE) >= _CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[key] = hit
+        hit = build(P)
+        if len(cache) >= _CACHE_SIZE:
+            cache.pop(next(iter(cache)))
+        cache[key] = hit
     return hit
 
 
@@ -424,30 +434,28 @@ def _fan_build(P, FN, FO, EV, VX):
 def fan_rows(points):
     """(faces, edges, vertices, rows): the normal fan of the hull of ``points`` (M, 3),
     M <= FAN_MAX_POINTS, for kernels/hullell.py, as rows to store after the shape's
-    points (and group rows) in the table's verts: ``faces`` rows of unit outward face
+    points in the table's verts (such a hull has no group rows): ``faces`` rows of unit outward face
     normals, then one flat run of float64 values three to a row: the faces' offsets
     (the largest n . p over the points), the ``vertices``' point indices, and per edge
     four indices (its two end points and its two faces).  (0, 0, 0, no rows) when
     the points are too many, flat or degenerate (the kernels then use GJK/EPA).
     Cached by the points' bytes, as hull_points."""
     P = np.ascontiguousarray(points, dtype=np.float64)
-    none = (0, 0, 0, np.zeros((0, 3)))
     if not 4 <= len(P) <= FAN_MAX_POINTS:
-        return none
-    key = (P.shape, P.tobytes())
-    hit = _FAN_CACHE.get(key)
-    if hit is None:
-        n = len(P)
-        FN, FO = np.zeros((2 * n, 3)), np.zeros(2 * n)
-        EV, VX = np.zeros((3 * n, 4), np.int64), np.zeros(n, np.int64)
-        nf, ne, nv = _fan_build(P, FN, FO, EV, VX)
-        if nf == 0:
-            hit = none
-        else:
-            flat = np.concatenate([FO[:nf], VX[:nv], EV[:ne].ravel()]).astype(np.float64)
-            flat = np.concatenate([flat, np.zeros(-len(flat) % 3)])
-            hit = (nf, ne, nv, np.concatenate([FN[:nf], flat.reshape(-1, 3)]))
-        if len(_FAN_CACHE) >= _CACHE_SIZE:
-            _FAN_CACHE.pop(next(iter(_FAN_CACHE)))
-        _FAN_CACHE[key] = hit
-    return hit
+        return _NO_FAN
+    return _cached(_FAN_CACHE, P, _fan)
+
+
+_NO_FAN = (0, 0, 0, np.zeros((0, 3)))
+
+
+def _fan(P):
+    n = len(P)
+    FN, FO = np.zeros((2 * n, 3)), np.zeros(2 * n)
+    EV, VX = np.zeros((3 * n, 4), np.int64), np.zeros(n, np.int64)
+    nf, ne, nv = _fan_build(P, FN, FO, EV, VX)
+    if nf == 0:
+        return _NO_FAN
+    flat = np.concatenate([FO[:nf], VX[:nv], EV[:ne].ravel()]).astype(np.float64)
+    flat = np.concatenate([flat, np.zeros(-len(flat) % 3)])
+    return nf, ne, nv, np.concatenate([FN[:nf], flat.reshape(-1, 3)])

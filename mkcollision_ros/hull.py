@@ -38,6 +38,7 @@ import math
 
 import numpy as np
 
+from .kernels.constants import FAN_MAX_POINTS
 from .kernels.jit import njit_kernel
 
 # a face's "outside": farther above its plane than this (relative to the points' extent);
@@ -315,10 +316,6 @@ def _cached(cache, P, build):
     return hit
 
 
-# hulls of at most this many points get their normal fan stored (fan_rows): the exact
-# ellipsoid-hull kernel walks every face, edge and vertex, which pays against GJK/EPA
-# only on small hulls, and the brute-force builder below is O(points^4) at worst
-FAN_MAX_POINTS = 64
 _FAN_TOL = 1e-10        # on a face plane: within this times the points' extent
 _FAN_THIN = 1e-6        # a triple spans a plane only if |cross| > this times extent^2
 _FAN_CACHE = {}

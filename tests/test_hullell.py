@@ -10,7 +10,7 @@ from bench.common import pair_cases, relative_poses
 from mkcollision_ros.hull import FAN_MAX_POINTS, fan_rows
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
-from mkcollision_ros.kernels.hullell import (HE_EXACT, HE_ROWS, HE_UNPROVED,
+from mkcollision_ros.kernels.hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED,
                                               ellipsoid_hull_depth)
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table, point_count, shape_row
@@ -70,9 +70,9 @@ def test_fan_is_the_hulls_boundary(seed):
 
 def _pair_runs(n, seed, margin, swap):
     """Per case: (GJK/EPA's depth, the ellipsoid's rolling radius, outcome of the first
-    call (no overlap known), decided (again with the overlap known where GJK/EPA finds
-    the cores overlapping, as gjk_epa_ws does), fan depth, fan normal, GJK normal,
-    witness residual, scale), the kernel called directly."""
+    call (no overlap known, ``stop`` 0), decided (again with the overlap known where
+    GJK/EPA finds the cores overlapping, as gjk_epa_ws does), fan depth, fan normal, GJK
+    normal, witness residual (pb - pa + h n), scale, res), the kernel called directly."""
     shapes, _, _, pos, quat = pair_cases("ellipsoid", "convex", n, seed=seed)
     for s in shapes:
         s["margin"] = margin
@@ -93,14 +93,15 @@ def _pair_runs(n, seed, margin, swap):
         depth = -out[C.OUT_DIST]
         res[:] = np.nan
         args = (sa, sb, fan.verts, R[0], T[0], scale)
-        first = ellipsoid_hull_depth(*args, False, rows, roots, res)
+        first = ellipsoid_hull_depth(*args, False, 0.0, rows, roots, res)
         got = first
         if first == HE_UNPROVED and depth > roll + 2 * margin + 1e-9 * scale:
-            got = ellipsoid_hull_depth(*args, True, rows, roots, res)
+            got = ellipsoid_hull_depth(*args, True, 0.0, rows, roots, res)
         full = res[0] + roll + 2 * margin           # both margins
         runs.append((depth, roll, first, got == HE_EXACT, full, res[1:4].copy(),
                      out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
-                     np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale))
+                     np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale,
+                     res.copy()))
     return runs
 
 
@@ -118,11 +119,29 @@ def test_exact_depth_matches_gjk_epa(swap, margin):
     assert len(proved) >= 0.7 * len(cores)
     # with GJK's proof, it decides nearly all of them (the rest go on to EPA)
     assert sum(r[3] for r in cores) >= 0.95 * len(cores)
-    for depth, _, _, dec, h, n, n_ref, resid, scale in runs:
+    for depth, _, _, dec, h, n, n_ref, resid, scale, _ in runs:
         if dec:
             assert abs(h - depth) <= 2e-8 * scale
             assert np.arccos(np.clip(n @ n_ref, -1.0, 1.0)) < 1e-3
             assert resid <= 1e-12 * scale
+
+
+@pytest.mark.parametrize("swap", [False, True])
+def test_face_plane_proves_pairs_apart(swap):
+    margin = 0.02
+    runs = _pair_runs(400, 31 + 2 * swap, margin, swap)
+    # cores apart by GJK/EPA (the distance of the cores: the ellipsoid less its
+    # rolling radius, both margins off)
+    apart = [r for r in runs if r[0] < r[1] + 2 * margin - 1e-9 * r[8]]
+    out = [r for r in runs if r[2] == HE_APART]
+    assert len(apart) > 60 and len(out) >= 0.6 * len(apart)
+    for depth, roll, _, _, h, n, _, _, scale, res in out:
+        gap = -(h - roll - 2 * margin)           # res[0] = -gap, for the cores
+        assert gap > 0.0                         # beyond ``stop`` (0 here)
+        assert gap <= -depth + roll + 2 * margin + 1e-9 * scale   # a lower bound
+        assert abs(np.linalg.norm(n) - 1.0) < 1e-12
+        # pa and pb on either side of the plane, gap apart along its normal
+        assert abs(n @ (res[7:10] - res[4:7]) - gap) <= 1e-9 * scale
 
 
 def test_batch_kernel_takes_the_fan_and_agrees_with_gjk_epa():

@@ -22,8 +22,11 @@ N_PARAMS = 8
 P_GROUPS = 0     # convex: groups of its points, two rows each right after them in verts
                  # (0: none; mkcollision_ros.hull.support_groups, geometry._grouped_support)
 P_FAN_FACES = 1  # convex: its hull's faces, edges and vertices stored after its points
-P_FAN_EDGES = 2  # (and group rows) in verts for hullell.py (0 faces: none;
+P_FAN_EDGES = 2  # in verts for hullell.py (0 faces: none, and then maybe group rows;
 P_FAN_VERTS = 3  # mkcollision_ros.hull.fan_rows has the layout)
+FAN_MAX_POINTS = 64  # hulls of at most this many kept points get their fan (fan_rows): the
+                     # exact kernel walks every face, edge and vertex, which pays against
+                     # GJK/EPA only on small hulls, and fan_rows' builder is O(points^4)
 P_ROLL = 3       # ellipsoid: radius of a ball that rolls freely inside it (m), see
                  # geometry.py (0 is always valid: the core is then the ellipsoid)
 P_MARGIN = 6     # padding radius added around the shape (m)

@@ -196,8 +196,8 @@ from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_de
                      segment_cylinder_depth, sides_crossing)
 from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core_xyz,
                        shape_scale)
-from .hullell import (HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED, ellipsoid_hull_depth,
-                      ellipsoid_hull_pair)
+from .hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED,
+                      ellipsoid_hull_depth, ellipsoid_hull_pair)
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -2761,10 +2761,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     elif ellipsoid_hull_pair(sa, sb):
         # an ellipsoid and a small hull with its normal fan stored (hullell): the exact
         # depth when a cheap test proves the pair overlapping; without that proof, again
-        # after GJK once it finds the cores overlapping (below, in place of EPA)
-        fan = ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False,
+        # after GJK once it finds the cores overlapping (below, in place of EPA); or a
+        # hull face's plane proving the cores farther apart than the cutoff and the
+        # touching band
+        fan = ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False, ra + rb + band,
                                    fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
-        if fan == HE_EXACT:
+        if fan == HE_EXACT or fan == HE_APART:
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
@@ -2828,8 +2830,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
                 st = ST_FAILED
         return st
     if fan == HE_UNPROVED and ellipsoid_hull_depth(
-            sa, sb, verts, r_ab, t_ab, scale, True, fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8],
-            res) == HE_EXACT:
+            sa, sb, verts, r_ab, t_ab, scale, True, ra + rb + band, fs[_V:_V + HE_ROWS],
+            fv[_FD:_FD + 8], res) == HE_EXACT:
         return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.

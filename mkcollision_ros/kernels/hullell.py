@@ -1,8 +1,8 @@
 """An ellipsoid and a small convex hull in closed form and 1-D root searches, before GJK
 and EPA: the exact depth of the ellipsoid E and the hull B over B's normal fan
 (gjk_epa.gjk_epa_ws calls ellipsoid_hull_depth first for such a pair when the hull has
-its fan stored, mkcollision_ros.hull.fan_rows; where it decides nothing it returns
-False and GJK and EPA run as for any pair).
+its fan stored, mkcollision_ros.hull.fan_rows; where it decides nothing GJK and EPA
+run as for any pair).
 
 Why: on overlapping ellipsoid-hull pairs EPA needs ~16 supports of A - B when the
 minimum lies at a hull face, ~30 at an edge and ~47 at a vertex (BENCHMARKS.md,
@@ -23,17 +23,19 @@ restricted to it.  So the candidates are:
 
 A foot is a root t of the secular equation sum_i w_i / (l_i + t)^2 = 1 (w_i = l_i P_i^2,
 P the point in the ellipse's or E's axes); the normal there is N_i = P_i / (l_i + t) and
-f = -t |N|.  It counts only if B's support along -n is attained at that edge or vertex
-(within 1e-12 * scale).  Of the roots only the one right of the least pole and the two
-between the two least poles can be local minima of the distance on the surface (its
-Hessian on the tangent plane is I + t D^-1), so no other is searched.
+f = -t |N|.  It counts only if n lies in the edge's arc (two signs) or B's support along
+-n is attained at the vertex (within 1e-12 * scale).  Of the roots only the one right
+of the least pole and the two between the two least poles can be local minima of the
+distance on the surface (its Hessian on the tangent plane is I + t D^-1), so no other
+is searched.
 
 Pruning (every bound rigorous; U the least value found so far, starting from the
 faces'):
   * an edge: f on its arc is at least the larger of its tangent planes at the arc's
     ends (f is convex and homogeneous), taken over the chord between the ends (a closed
-    form), and where that does not clear U, over the arc itself (each plane on its side
-    of their crossing: a sinusoid's least value over an arc);
+    form from the faces' values alone, where the two cross; within the fan's
+    tolerance, HE_FAN_SLACK), and where that does not clear U, over the arc itself
+    (each plane on its side of their crossing: a sinusoid's least value over an arc);
   * a vertex u inside E: A - B holds E - u, so the depth is at least u's depth in E,
     at least (1 - rho_u) a_min (rho the ellipsoid norm, a the semi-axes) and exactly
     the distance to u's foot right of the pole once that is solved (L below, the largest
@@ -47,13 +49,15 @@ faces'):
     before any search.
 
 The pruning skips the negative feet of vertices outside E, so it holds only if E and B
-overlap.  The kernel proves that before anything else where it is cheap: a hull vertex
-inside E or E's centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases).
-Else gjk_epa_ws runs GJK first and calls it again once GJK has found the cores
-overlapping, in place of EPA: pairs apart then cost the vertices' transform and a pass
-over the face planes only.  On near-degenerate input (equal semi-axes, a point on an
-axis plane, a search that does not converge) it decides nothing, and a face plane with
-E wholly beyond it ends the call at once (apart: GJK's case).
+overlap.  The kernel proves that first where it is cheap: a hull vertex inside E or E's
+centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases).  Else
+gjk_epa_ws runs GJK and calls it again once GJK has found the cores overlapping, in
+place of EPA.  The face pass comes before anything else: a face's plane with E wholly
+beyond it proves the pair apart and ends the call (with the gap as a bound, when that
+exceeds the caller's ``stop``; else GJK gives the distance), which 84% of the pairs
+apart with bounding spheres overlapping in bench/vs_mujoco.py's row have.  On
+near-degenerate input (equal semi-axes, a point on an axis plane, a search that does
+not converge) it decides nothing.
 
 The answer is for E's core, which is E shrunk by its rolling radius (geometry.py), and
 B's core, the hull of its points: res = [U - r, n, pa, pb] as boxell's.
@@ -67,7 +71,8 @@ import math
 
 import numpy as np
 
-from .constants import CONVEX, ELLIPSOID, P_FAN_EDGES, P_FAN_FACES, P_FAN_VERTS, P_ROLL
+from .constants import (CONVEX, ELLIPSOID, FAN_MAX_POINTS, P_FAN_EDGES, P_FAN_FACES,
+                        P_FAN_VERTS, P_ROLL)
 from .geometry import borrow_args
 from .jit import borrow, njit_inline, njit_kernel
 
@@ -75,13 +80,18 @@ HE_ITERS = 60          # cap of every 1-D root search
 HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
 HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
 HE_SUPPORT_TOL = 1e-12  # a foot counts if B's support along -n is within this * scale
+HE_FAN_SLACK = 4e-10   # the edges' chord bound takes an edge's point on its faces' planes,
+                       # within hull._FAN_TOL (1e-10) of the points' extent (<= 2 sqrt(3)
+                       # radius_B), so it is lowered by this * scale
+HE_MAX_FACES = 2 * FAN_MAX_POINTS - 4  # a polytope's faces, at most (Euler's formula)
 HE_V = 0               # scratch rows (ellipsoid_hull_depth's ``rows``): the hull's points
                        # in E's frame (FAN_MAX_POINTS rows)
-HE_FACES = HE_V + 64   # ... per face E's support point, n and (f, offset, 0)
-HE_ROWS = HE_FACES + 3 * 128
-HE_EXACT = 1           # ellipsoid_hull_depth's outcomes: the depth, exact
+HE_FACES = HE_V + FAN_MAX_POINTS  # ... per face E's support point, then n, then f
+HE_ROWS = HE_FACES + 3 * HE_MAX_FACES  # (hA, offset, f)
+HE_APART = 2           # ellipsoid_hull_depth's outcomes: apart by more than ``stop``
+HE_EXACT = 1           # ... the depth, exact
 HE_UNPROVED = 0        # ... nothing, for want of a proof that the pair overlaps
-HE_UNDECIDED = -1      # ... nothing (apart, or a case left to GJK/EPA)
+HE_UNDECIDED = -1      # ... nothing (a case left to GJK/EPA)
 
 
 @njit_inline
@@ -135,8 +145,9 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
     2, written to out[k], out[k + 1]; returns the count, -1 when undecided."""
     gap = l1 - l0
     # with the third term dropped phi is no larger, and that one's least value is
-    # (w0^1/3 + w1^1/3)^3 / gap^2 - 1: no root if it is > 0 ((.)^3 >= w0 + w1 first)
-    if w0 + w1 > gap * gap:
+    # (w0^1/3 + w1^1/3)^3 / gap^2 - 1: no root if it is > 0 (first without the cube
+    # roots: (.)^3 = w0 + w1 + 3 c0 c1 (c0 + c1) >= w0 + w1 + 6 sqrt(w0 w1))
+    if w0 + w1 + 6.0 * math.sqrt(w0 * w1) > gap * gap * (1.0 + 1e-9):
         return 0
     c0, c1 = np.cbrt(w0), np.cbrt(w1)
     if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
@@ -219,16 +230,54 @@ def _sinus_min(wx, wy, wz, px, py, pz, qx, qy, qz):
     return m
 
 
+@njit_inline
+def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, a0, a1,
+               a2, hA, roll, gap):
+    """res = [-gap, n, pa, pb] for cores proved ``gap`` apart by the plane of the hull's
+    face of unit normal f (the hull's frame; m in E's, hA = h_E(m), a the squared
+    semi-axes): n from A to B, pa and pb the two cores' support points across the plane
+    (not the closest points, as cylcyl._apart_out's)."""
+    best, u = -np.inf, 0
+    for i in range(nvx):
+        j = int(fl[nf + i])
+        d = fx * pts[j, 0] + fy * pts[j, 1] + fz * pts[j, 2]
+        if d > best:
+            best, u = d, j
+    px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
+    # E's core's support point along -m, E's frame: -L m / hA + roll m
+    ih = 1.0 / hA
+    sx, sy, sz = (roll - a0 * ih) * mx, (roll - a1 * ih) * my, (roll - a2 * ih) * mz
+    res[0] = -gap
+    if side == 0:
+        # A is E: n = -m; B's point into A's frame
+        res[1], res[2], res[3] = -mx, -my, -mz
+        res[4], res[5], res[6] = sx, sy, sz
+        for c in range(3):
+            res[7 + c] = r_ab[c, 0] * px + r_ab[c, 1] * py + r_ab[c, 2] * pz + t_ab[c]
+        return
+    # A is the hull: n = f; E's point into A's frame
+    res[1], res[2], res[3] = fx, fy, fz
+    res[4], res[5], res[6] = px, py, pz
+    for c in range(3):
+        res[7 + c] = r_ab[c, 0] * sx + r_ab[c, 1] * sy + r_ab[c, 2] * sz + t_ab[c]
+
+
 @njit_kernel
-def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots, res):
+def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
+                         res):
     """The exact depth of an ellipsoid's core and a hull with its fan stored (either
     order; B's pose r_ab, t_ab in A's frame), by the module notes.  ``overlap``: the
-    caller has proved that the pair overlaps (GJK on the cores).  ``rows`` (>= HE_ROWS,
-    3) and ``roots`` (>= 3,) are scratch.  Returns HE_EXACT with res[:10] = [h, n (3),
-    pa (3), pb (3)] in A's frame (h the cores' depth, n from A to B, pa and pb on the
-    two cores, pb - pa == -h n); HE_UNPROVED (without ``overlap``, when neither a hull
-    vertex inside E nor E's centre inside B proves the overlap) or HE_UNDECIDED
-    otherwise, with res untouched."""
+    caller has proved that the pair overlaps (GJK on the cores).  ``stop`` (m): a face
+    plane proving the cores farther apart than this ends the call (as GJK's).  ``rows``
+    (>= HE_ROWS, 3) and ``roots`` (>= 3,) are scratch.  Returns
+
+    * HE_EXACT with res[:10] = [h, n (3), pa (3), pb (3)] in A's frame (h the cores'
+      depth, n from A to B, pa and pb on the two cores, pb - pa == -h n);
+    * HE_APART with res = [-g, n, pa, pb]: the cores are at least g > stop apart, n
+      normal to a hull face's plane that separates them, pa and pb points of the cores
+      (_apart_out);
+    * HE_UNPROVED (without ``overlap``, when neither a hull vertex inside E nor E's
+      centre inside B proves the overlap) or HE_UNDECIDED otherwise, res untouched."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     rows, roots, res = borrow(rows), borrow(roots), borrow(res)
     side = 0 if sa[0] == ELLIPSOID else 1
@@ -236,7 +285,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
     hull = sb if side == 0 else sa
     prm, v0, vn = hull[1], hull[2], hull[3]
     nf, ne, nvx = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
-    if vn > HE_FACES - HE_V or nf > (HE_ROWS - HE_FACES) // 3:
+    if vn > FAN_MAX_POINTS or nf > HE_MAX_FACES:
         return HE_UNDECIDED
     fnr = v0 + vn               # the face normals' rows, then the flat run
     flat = fnr + nf             # offsets [0, nf), vertices [nf, nf + nvx), edges after
@@ -257,15 +306,43 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
         t1 = -(r10 * t_ab[0] + r11 * t_ab[1] + r12 * t_ab[2])
         t2 = -(r20 * t_ab[0] + r21 * t_ab[1] + r22 * t_ab[2])
     a0, a1, a2 = ell[0] ** 2, ell[1] ** 2, ell[2] ** 2
+    roll = ell[P_ROLL]
+    V = rows[HE_V:HE_V + vn]
+    W = rows[HE_FACES:HE_FACES + nf]
+    M = rows[HE_FACES + nf:HE_FACES + 2 * nf]
+    Q = rows[HE_FACES + 2 * nf:HE_FACES + 3 * nf]
+    pts = verts[v0:v0 + vn]
+    tol = HE_SUPPORT_TOL * scale
+    # E's centre c in the hull's frame, and its offset below each face's plane, o - f . c
+    # (= o + m . t): c inside all of them proves the overlap, and the plane it lies
+    # farthest beyond is the one that most often proves the pair apart, before the
+    # vertices and the full face pass are paid for
+    c0 = -(r00 * t0 + r10 * t1 + r20 * t2)
+    c1 = -(r01 * t0 + r11 * t1 + r21 * t2)
+    c2 = -(r02 * t0 + r12 * t1 + r22 * t2)
+    fmin, omin = 0, np.inf
+    for f in range(nf):
+        off = fl[f] - (verts[fnr + f, 0] * c0 + verts[fnr + f, 1] * c1
+                       + verts[fnr + f, 2] * c2)
+        Q[f, 1] = off
+        if off < omin:
+            omin, fmin = off, f
+    if not omin > 0.0:
+        fx, fy, fz = verts[fnr + fmin, 0], verts[fnr + fmin, 1], verts[fnr + fmin, 2]
+        mx = r00 * fx + r01 * fy + r02 * fz
+        my = r10 * fx + r11 * fy + r12 * fz
+        mz = r20 * fx + r21 * fy + r22 * fz
+        hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
+        # E's core (E less the rolling ball) lies roll - (hA + o) beyond the plane
+        if roll - (hA + omin) > stop:
+            _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
+                       a0, a1, a2, hA, roll, roll - (hA + omin))
+            return HE_APART
+    inside = omin > 0.0
     amin = math.sqrt(min(a0, min(a1, a2)))
     amax = math.sqrt(max(a0, max(a1, a2)))
     rroll = amin * amin / amax
     i0_, i1_, i2_ = 1.0 / a0, 1.0 / a1, 1.0 / a2
-    V = rows[HE_V:HE_V + vn]
-    S = rows[HE_FACES:HE_FACES + nf]
-    N = rows[HE_FACES + nf:HE_FACES + 2 * nf]
-    Q = rows[HE_FACES + 2 * nf:HE_FACES + 3 * nf]
-    pts = verts[v0:v0 + vn]
     # L: a lower bound on the depth, the largest (1 - rho) a_min of an inside vertex,
     # raised to a vertex's exact depth in E (its foot right of the pole) once found
     L = 0.0
@@ -281,15 +358,8 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
             L = max(L, (1.0 - math.sqrt(rr)) * amin)
     # the pruning below skips negative feet, so the pair must be known to overlap: by
     # the caller (GJK), a hull vertex inside E (L > 0) or E's centre inside B
-    if not (overlap or L > 0.0):
-        for f in range(nf):
-            fx, fy, fz = verts[fnr + f, 0], verts[fnr + f, 1], verts[fnr + f, 2]
-            off = (fl[f] + (r00 * fx + r01 * fy + r02 * fz) * t0
-                   + (r10 * fx + r11 * fy + r12 * fz) * t1
-                   + (r20 * fx + r21 * fy + r22 * fz) * t2)
-            if not off > 0.0:
-                return HE_UNPROVED
-    tol = HE_SUPPORT_TOL * scale
+    if not (overlap or inside or L > 0.0):
+        return HE_UNPROVED
     U = np.inf
     bx = by = bz = 0.0
     for f in range(nf):
@@ -298,40 +368,48 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
         my = r10 * fx + r11 * fy + r12 * fz
         mz = r20 * fx + r21 * fy + r22 * fz
         hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
-        off = fl[f] + mx * t0 + my * t1 + mz * t2
+        off = Q[f, 1]
         val = hA + off
         if not val > 0.0:
-            return HE_UNDECIDED  # E wholly beyond the face's plane, or NaN
-        # n = -m; E's support point there, -L m / hA
-        ih = 1.0 / hA
-        S[f, 0], S[f, 1], S[f, 2] = -a0 * mx * ih, -a1 * my * ih, -a2 * mz * ih
-        N[f, 0], N[f, 1], N[f, 2] = -mx, -my, -mz
-        Q[f, 0] = val
+            # E wholly beyond the face's plane (or NaN)
+            if roll - val > stop:
+                _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my,
+                           mz, a0, a1, a2, hA, roll, roll - val)
+                return HE_APART
+            return HE_UNDECIDED
+        # per face: L m (E's support point along n = -m is -L m / hA), m, hA, o, f(n)
+        W[f, 0], W[f, 1], W[f, 2] = a0 * mx, a1 * my, a2 * mz
+        M[f, 0], M[f, 1], M[f, 2] = mx, my, mz
+        Q[f, 0], Q[f, 2] = hA, val
         if val < U:
             U = val
             bx, by, bz = -mx, -my, -mz
+    slack = tol + HE_FAN_SLACK * scale
     for e in range(ne):
         q = fe + 4 * e
-        ia, ib = int(fl[q]), int(fl[q + 1])
         f1, f2 = int(fl[q + 2]), int(fl[q + 3])
+        # f on the arc is at least the larger of its tangent planes at the arc's ends,
+        # P_i(n) = (s_i - v) . n (s_i E's support point at n_i, v the edge's point).
+        # P_1 is g1 at n1 and s_1 . n2 + o2 at n2 (v on face 2's plane, within the
+        # fan's tolerance), P_2 likewise, and g_j - P_i(n_j) = (h1 h2 - m1^T L m2) / h_i:
+        # the two cross on the chord at the weights (h2, h1), where both are
+        # (h2 g1 + m1^T L m2 + h1 o2) / (h1 + h2), the least of their larger over the
+        # chord, and so over the arc (f is homogeneous; the arc lies beyond the chord)
+        h1, h2 = Q[f1, 0], Q[f2, 0]
+        w12 = W[f1, 0] * M[f2, 0] + W[f1, 1] * M[f2, 1] + W[f1, 2] * M[f2, 2]
+        if h2 * Q[f1, 2] + w12 + h1 * Q[f2, 1] >= (U - slack) * (h1 + h2):
+            continue
+        ia, ib = int(fl[q]), int(fl[q + 1])
         vx, vy, vz = V[ia, 0], V[ia, 1], V[ia, 2]
         # the arc's ends n1, n2, f there, and E's support points there less v
-        n1x, n1y, n1z = N[f1, 0], N[f1, 1], N[f1, 2]
-        n2x, n2y, n2z = N[f2, 0], N[f2, 1], N[f2, 2]
-        g1, g2 = Q[f1, 0], Q[f2, 0]
-        s1x, s1y, s1z = S[f1, 0] - vx, S[f1, 1] - vy, S[f1, 2] - vz
-        s2x, s2y, s2z = S[f2, 0] - vx, S[f2, 1] - vy, S[f2, 2] - vz
-        # tangent planes of f at the arc's ends (s_i . n), over the chord
+        n1x, n1y, n1z = -M[f1, 0], -M[f1, 1], -M[f1, 2]
+        n2x, n2y, n2z = -M[f2, 0], -M[f2, 1], -M[f2, 2]
+        g1, g2 = Q[f1, 2], Q[f2, 2]
+        i1, i2 = 1.0 / h1, 1.0 / h2
+        s1x, s1y, s1z = -W[f1, 0] * i1 - vx, -W[f1, 1] * i1 - vy, -W[f1, 2] * i1 - vz
+        s2x, s2y, s2z = -W[f2, 0] * i2 - vx, -W[f2, 1] * i2 - vy, -W[f2, 2] * i2 - vz
         c12 = s1x * n2x + s1y * n2y + s1z * n2z
         c21 = s2x * n1x + s2y * n1y + s2z * n1z
-        den = (g1 - c21) + (g2 - c12)
-        if den > 0.0:
-            al = (g2 - c12) / den
-            lb = al * g1 + (1.0 - al) * c12
-        else:
-            lb = min(g1, g2)
-        if lb >= U - tol:
-            continue
         # tighter: the larger of the two planes over the arc itself, each on its side
         # of their crossing
         d1, d2 = g1 - c21, c12 - g2
@@ -393,9 +471,11 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
             c0, c1 = N0 / nn, N1 / nn
             ap, aq = ux * c0 - uy * c1, uy * c0 + ux * c1
             nx, ny, nz = ap * px + aq * qx, ap * py + aq * qy, ap * pz + aq * qz
-            # in the edge's arc: B's support along -n attained at v (within tol)
-            if (_h_minus(V, fl, nf, nvx, nx, ny, nz)
-                    > -(nx * vx + ny * vy + nz * vz) + tol):
+            # in the edge's arc: between n1 = p and n2 on their great circle (the plane
+            # normal to the edge), where B's support along -n is attained at v
+            c2 = n2x * px + n2y * py + n2z * pz
+            s2 = n2x * qx + n2y * qy + n2z * qz
+            if not (aq * s2 >= 0.0 and (ap * s2 - aq * c2) * s2 >= 0.0):
                 continue
             U = val
             bx, by, bz = nx, ny, nz
@@ -411,18 +491,24 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
     l0, l1, l2 = lam[i0], lam[i1], lam[i2]
     if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
         return HE_UNDECIDED
+    lmid = l0 / math.sqrt(l2)
+    kmid = l1 / (l1 - l0)
     for i in range(nvx):
         u = int(fl[nf + i])
-        x = (V[u, 0], V[u, 1], V[u, 2])
-        rho = math.sqrt(x[0] * x[0] * i0_ + x[1] * x[1] * i1_ + x[2] * x[2] * i2_)
-        j0 = rho < 1.0 and (1.0 - rho) * amax >= L - tol
+        P0 = V[u, i0]
         # a root between the poles is a foot y on the far side along the least axis:
         # |y - x| >= |y_0| + |x_0| > |x_0| l1 / (l1 - l0)
-        mid = (l0 / math.sqrt(l2) < U and abs(x[i0]) * l1 < U * (l1 - l0)
-               and (rho < 1.0 or 2.0 * rroll + (rho - 1.0) * amin < U))
+        mid = lmid < U and abs(P0) * kmid < U
+        x0, x1, x2 = V[u, 0], V[u, 1], V[u, 2]
+        rr = x0 * x0 * i0_ + x1 * x1 * i1_ + x2 * x2 * i2_
+        if rr < 1.0:
+            j0 = (1.0 - math.sqrt(rr)) * amax >= L - tol
+        else:
+            j0 = False
+            mid = mid and 2.0 * rroll + (math.sqrt(rr) - 1.0) * amin < U
         if not (j0 or mid):
             continue
-        P0, P1, P2 = x[i0], x[i1], x[i2]
+        P1, P2 = V[u, i1], V[u, i2]
         w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
         small = 1e-24 * l2 * scale * scale
         if not (w0 > small and w1 > small and w2 > small):
@@ -452,7 +538,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
             ny = c[0] if i0 == 1 else (c[1] if i1 == 1 else c[2])
             nz = c[0] if i0 == 2 else (c[1] if i1 == 2 else c[2])
             if (_h_minus(V, fl, nf, nvx, nx, ny, nz)
-                    > -(nx * x[0] + ny * x[1] + nz * x[2]) + tol):
+                    > -(nx * x0 + ny * x1 + nz * x2) + tol):
                 continue
             U = val
             bx, by, bz = nx, ny, nz
@@ -462,7 +548,6 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, rows, roots,
     ex, ey, ez = a0 * bx * ih, a1 * by * ih, a2 * bz * ih
     if not math.isfinite(U):
         return HE_UNDECIDED
-    roll = ell[P_ROLL]
     if side == 0:
         res[0] = U - roll
         res[1], res[2], res[3] = bx, by, bz

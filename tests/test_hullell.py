@@ -165,3 +165,28 @@ def test_batch_kernel_takes_the_fan_and_agrees_with_gjk_epa():
     steps = outs[0][deep, C.OUT_ITERS], outs[1][deep, C.OUT_ITERS]
     assert np.mean(steps[0] == 1) > 0.7 and np.all(steps[1] > 1)
     assert steps[0].mean() < 0.5 * steps[1].mean()
+
+
+def test_contacts_mode_ends_pairs_apart_at_a_face_plane():
+    # cutoff 0 (the pipeline's): a face plane proving a pair farther apart than the
+    # touching band ends it without GJK (test_face_plane_proves_pairs_apart), with the
+    # gap as a lower bound on the distance; the statuses are those of exact distances
+    shapes, fan, pairs, pos, quat = pair_cases("ellipsoid", "convex", 400, seed=22)
+    plain = build_table(shapes, prune=False)
+    outs, sts = [], []
+    for t, cutoff in ((fan, 0.0), (plain, np.inf)):
+        out, st = np.zeros((len(pairs), C.OUT_SIZE)), np.zeros(len(pairs), np.int64)
+        collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat, C.M_AUTO,
+                      cutoff, out, st)
+        outs.append(out)
+        sts.append(st)
+    assert np.array_equal(sts[0], sts[1]) and np.all(np.isfinite(outs[0]))
+    radius = fan.params[:, C.P_RADIUS]
+    scale = radius[0::2] + radius[1::2]
+    near = np.linalg.norm(pos[1::2] - pos[0::2], axis=1) <= scale
+    sep = (sts[0] == C.ST_SEPARATED) & near
+    assert sep.sum() > 50
+    got, exact = outs[0][sep, C.OUT_DIST], outs[1][sep, C.OUT_DIST]
+    assert np.all(got > 0.0) and np.all(got <= exact + 1e-9 * scale[sep])
+    n = outs[0][sep, C.OUT_NORMAL:C.OUT_NORMAL + 3]
+    assert np.allclose(np.linalg.norm(n, axis=1), 1.0, atol=1e-12)

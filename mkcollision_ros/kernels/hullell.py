@@ -196,16 +196,17 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
 
 
 @njit_inline
-def _h_minus(V, fl, nf, nv, nx, ny, nz):
-    """h_B(-n): the largest -n . v over the hull's vertices (their indices, nv of them,
-    at value nf of the flat run from row ``flat``; V their positions in E's frame)."""
-    best = -np.inf
+def _vertex_top(X, fl, nf, nv, dx, dy, dz):
+    """(the largest d . x, its row) over the hull's vertices: their indices, nv of them,
+    at value nf of the flat run ``fl``, their positions the rows of X (the hull's points
+    in its own frame, or in E's)."""
+    best, top = -np.inf, 0
     for i in range(nv):
         u = int(fl[nf + i])
-        s = -(nx * V[u, 0] + ny * V[u, 1] + nz * V[u, 2])
+        s = dx * X[u, 0] + dy * X[u, 1] + dz * X[u, 2]
         if s > best:
-            best = s
-    return best
+            best, top = s, u
+    return best, top
 
 
 @njit_inline
@@ -239,12 +240,7 @@ def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, 
     face of unit normal f (the hull's frame; m in E's, hA = h_E(m), a the squared
     semi-axes): n from A to B, pa and pb the two cores' support points across the plane
     (not the closest points, as cylcyl._apart_out's)."""
-    best, u = -np.inf, 0
-    for i in range(nvx):
-        j = int(fl[nf + i])
-        d = fx * pts[j, 0] + fy * pts[j, 1] + fz * pts[j, 2]
-        if d > best:
-            best, u = d, j
+    u = _vertex_top(pts, fl, nf, nvx, fx, fy, fz)[1]
     px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
     # E's core's support point along -m, E's frame: -L m / hA + roll m
     ih = 1.0 / hA
@@ -539,7 +535,8 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
             nx = c[0] if i0 == 0 else (c[1] if i1 == 0 else c[2])
             ny = c[0] if i0 == 1 else (c[1] if i1 == 1 else c[2])
             nz = c[0] if i0 == 2 else (c[1] if i1 == 2 else c[2])
-            if (_h_minus(V, fl, nf, nvx, nx, ny, nz)
+            # in the vertex's cone: B's support along -n attained at it (within tol)
+            if (_vertex_top(V, fl, nf, nvx, -nx, -ny, -nz)[0]
                     > -(nx * x0 + ny * x1 + nz * x2) + tol):
                 continue
             U = val

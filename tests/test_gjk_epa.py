@@ -1415,10 +1415,32 @@ def test_box_vertex_minimum_against_an_ellipsoid_is_the_depth():
             assert depth <= -sd + 1e-8 * scale
     assert found >= 25
 
+def _hull_cylinder_first(sa, sb, verts, r_ab, t_ab, scale, res):
+    """What gjk_epa_ws tries first for a cylinder and a hull (contacts mode): hullcyl's
+    exact depth or separating plane when the hull has its fan stored (stop: the
+    inflation radii and the touching band), cylcyl's hull_cylinder_depth where that
+    decides nothing (HE_UNDECIDED) or there is no fan; 0 when neither answers."""
+    from mkcollision_ros.kernels import cylcyl as C
+    from mkcollision_ros.kernels.constants import TOUCH_TOL
+    from mkcollision_ros.kernels.geometry import inflation
+    from mkcollision_ros.kernels.hullcyl import cylinder_hull_depth, cylinder_hull_pair
+    from mkcollision_ros.kernels.hullell import HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED
+    got = HE_UNDECIDED
+    if cylinder_hull_pair(sa, sb):
+        stop = inflation(sa[0], sa[1]) + inflation(sb[0], sb[1]) + TOUCH_TOL * scale
+        got = cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False, stop,
+                                  np.zeros((HE_ROWS, 3)), np.zeros(8), res)
+    if got == HE_EXACT or got == HE_APART:
+        return res[0]
+    return C.hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res) if (
+        got == HE_UNDECIDED) else 0.0
+
+
 def _cylinder_shortcut(kinds):
     """cylcyl's shortcut for a cylinder and the other kind of ``kinds`` (boxcyl's for a
-    box; boxell's for an ellipsoid and a box, its value only), as f(shape_a, shape_b,
-    verts, r_ab, t_ab, scale, res)."""
+    box; boxell's for an ellipsoid and a box, its value only; for a hull, hullcyl's
+    first, _hull_cylinder_first), as f(shape_a, shape_b, verts, r_ab, t_ab, scale,
+    res)."""
     from mkcollision_ros.kernels import cylcyl as C
     if sorted(kinds) == ["box", "ellipsoid"]:
         from mkcollision_ros.kernels.boxell import ellipsoid_box_depth
@@ -1432,7 +1454,7 @@ def _cylinder_shortcut(kinds):
         return lambda sa, sb, verts, r_ab, t_ab, scale, res: box_cylinder_depth(
             sa, sb, r_ab, t_ab, scale, np.zeros((BC_MAX_LEVEL + 8, 3)), res)
     if other == "convex":
-        return C.hull_cylinder_depth
+        return _hull_cylinder_first
     f = C.segment_cylinder_depth if other == "capsule" else C.ellipsoid_cylinder_depth
     return lambda sa, sb, verts, r_ab, t_ab, scale, res: f(sa, sb, r_ab, t_ab, scale, res)
 

@@ -198,6 +198,7 @@ from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core
                        shape_scale)
 from .hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED,
                       ellipsoid_hull_depth, ellipsoid_hull_pair)
+from .hullcyl import cylinder_hull_depth, cylinder_hull_pair
 from .jit import borrow, njit_inline, njit_kernel
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
@@ -2748,7 +2749,15 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         elif other == ELLIPSOID:
             d = ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res)
         elif other == CONVEX:
-            d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
+            if cylinder_hull_pair(sa, sb):
+                # the hull's fan stored (hullcyl): as the ellipsoid's below
+                fan = cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False,
+                                          ra + rb + band, fs[_V:_V + HE_ROWS],
+                                          fv[_FD:_FD + 8], res)
+                if fan == HE_EXACT or fan == HE_APART:
+                    return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+            if fan == HE_UNDECIDED:
+                d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
         if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     elif _ellipsoid_box(sa[0], sb[0]):
@@ -2829,10 +2838,18 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             if (vn * vn - _dot(v, w)) / vn > 1e-6 * scale:
                 st = ST_FAILED
         return st
-    if fan == HE_UNPROVED and ellipsoid_hull_depth(
-            sa, sb, verts, r_ab, t_ab, scale, True, ra + rb + band, fs[_V:_V + HE_ROWS],
-            fv[_FD:_FD + 8], res) == HE_EXACT:
-        return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
+    if fan == HE_UNPROVED:
+        # GJK found the cores overlapping: the fan's exact depth in place of EPA
+        if sa[0] == CYLINDER or sb[0] == CYLINDER:
+            fan = cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, True,
+                                      ra + rb + band, fs[_V:_V + HE_ROWS],
+                                      fv[_FD:_FD + 8], res)
+        else:
+            fan = ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, True,
+                                       ra + rb + band, fs[_V:_V + HE_ROWS],
+                                       fv[_FD:_FD + 8], res)
+        if fan == HE_EXACT:
+            return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.
     if n < 4:

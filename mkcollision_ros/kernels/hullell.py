@@ -110,6 +110,56 @@ def ellipsoid_hull_pair(sa, sb):
 
 
 @njit_inline
+def fan_run(prm, v0, vn, verts):
+    """A hull's stored fan (hull.fan_rows, after its vn points from row v0): (faces,
+    edges, vertices, the face normals' first row, the edges' start in the flat run, the
+    flat run: offsets [0, nf), vertex ids [nf, nf + nvx), edges (4 each) after)."""
+    nf, ne, nvx = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
+    fnr = v0 + vn
+    flat = fnr + nf
+    return (nf, ne, nvx, fnr, nf + nvx,
+            verts[flat:flat + (nf + nvx + 4 * ne + 2) // 3].reshape(-1))
+
+
+@njit_inline
+def hull_pose(side, r_ab, t_ab):
+    """The hull's pose in the other shape's frame (the hull is B when side is 0, else
+    A), as twelve scalars r00 .. r22, t0 .. t2: stores into scratch rows could alias an
+    array, and the compiler would reload it after each."""
+    if side == 0:
+        return (r_ab[0, 0], r_ab[0, 1], r_ab[0, 2], r_ab[1, 0], r_ab[1, 1], r_ab[1, 2],
+                r_ab[2, 0], r_ab[2, 1], r_ab[2, 2], t_ab[0], t_ab[1], t_ab[2])
+    r00, r01, r02 = r_ab[0, 0], r_ab[1, 0], r_ab[2, 0]
+    r10, r11, r12 = r_ab[0, 1], r_ab[1, 1], r_ab[2, 1]
+    r20, r21, r22 = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
+    return (r00, r01, r02, r10, r11, r12, r20, r21, r22,
+            -(r00 * t_ab[0] + r01 * t_ab[1] + r02 * t_ab[2]),
+            -(r10 * t_ab[0] + r11 * t_ab[1] + r12 * t_ab[2]),
+            -(r20 * t_ab[0] + r21 * t_ab[1] + r22 * t_ab[2]))
+
+
+@njit_inline
+def least_offset(verts, fl, fnr, nf, r00, r01, r02, r10, r11, r12, r20, r21, r22, t0, t1,
+                 t2, Q):
+    """The other shape's centre c (the origin of its frame; the hull's pose there r, t)
+    in the hull's frame and its offset below each face's plane, o - f . c (= o + m . t),
+    into Q[:, 1]: (the least offset, its face).  All positive proves the centre inside
+    the hull; the face with the least is the plane that most often proves the pair
+    apart."""
+    c0 = -(r00 * t0 + r10 * t1 + r20 * t2)
+    c1 = -(r01 * t0 + r11 * t1 + r21 * t2)
+    c2 = -(r02 * t0 + r12 * t1 + r22 * t2)
+    fmin, omin = 0, np.inf
+    for f in range(nf):
+        off = fl[f] - (verts[fnr + f, 0] * c0 + verts[fnr + f, 1] * c1
+                       + verts[fnr + f, 2] * c2)
+        Q[f, 1] = off
+        if off < omin:
+            omin, fmin = off, f
+    return omin, fmin
+
+
+@njit_inline
 def _phi(l0, l1, l2, w0, w1, w2, t):
     """phi(t) = sum w_i / (l_i + t)^2 - 1 and its first two derivatives."""
     a, b, c = 1.0 / (l0 + t), 1.0 / (l1 + t), 1.0 / (l2 + t)
@@ -196,6 +246,64 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
 
 
 @njit_inline
+def _plane_feet(g11, g12, g22, wp, wq, U, scale, roots):
+    """The feet that may give a local minimum below U of h(n) - n . P over the unit n of
+    a plane, h the support function of the centred ellipse G = [[g11, g12], [g12, g22]]
+    (in the plane's basis) and P = (wp, wq): their roots of the secular equation in
+    roots[:k].  Returns (k, u, P0, P1, lam0, lam1): the ellipse's least axis u (2-D),
+    P in its axes and the squared semi-axes; k = -1 when undecided (a near-circle, P
+    near an axis, a search that does not converge)."""
+    tr_ = 0.5 * (g11 + g22)
+    dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
+    lam0, lam1 = tr_ - dd, tr_ + dd
+    if not lam1 - lam0 > 1e-9 * lam1:
+        return -1, 0.0, 0.0, 0.0, 0.0, lam0, lam1
+    # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux)
+    if abs(g11 - lam0) > abs(g22 - lam0):
+        ux, uy = -g12, g11 - lam0
+    else:
+        ux, uy = g22 - lam0, -g12
+    un = math.sqrt(ux * ux + uy * uy)
+    ux, uy = ux / un, uy / un
+    P0 = ux * wp + uy * wq
+    P1 = -uy * wp + ux * wq
+    w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
+    small = 1e-24 * lam1 * scale * scale
+    if not (w0 > small and w1 > small):
+        return -1, ux, uy, P0, P1, lam0, lam1
+    k = 0
+    if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
+        roots[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
+        if not ok:
+            return -1, ux, uy, P0, P1, lam0, lam1
+        k = 1
+    if lam0 / math.sqrt(lam1) < U and abs(P0) * lam1 < U * (lam1 - lam0):
+        km = _roots_mid(lam0, lam1, lam1, w0, w1, 0.0, roots, k)
+        if km < 0:
+            return -1, ux, uy, P0, P1, lam0, lam1
+        k += km
+    return k, ux, uy, P0, P1, lam0, lam1
+
+
+@njit_inline
+def plane_foot(tt, P0, P1, lam0, lam1, ux, uy):
+    """A foot of _plane_feet (root tt; P, lam, u as it returns them): (h(n) - n . P, n's
+    coordinates in the plane's basis)."""
+    N0, N1 = P0 / (lam0 + tt), P1 / (lam1 + tt)
+    nn = math.sqrt(N0 * N0 + N1 * N1)
+    c0, c1 = N0 / nn, N1 / nn
+    return -tt * nn, ux * c0 - uy * c1, uy * c0 + ux * c1
+
+
+@njit_inline
+def _in_arc(ap, aq, c2, s2):
+    """Whether the unit n = ap p + aq q lies on the arc from p to n2 = c2 p + s2 q (p, q
+    orthonormal, the arc shorter than pi): both p x n and n x n2 along p x q's side of
+    the arc."""
+    return aq * s2 >= 0.0 and (ap * s2 - aq * c2) * s2 >= 0.0
+
+
+@njit_inline
 def _vertex_top(X, fl, nf, nv, dx, dy, dz):
     """(the largest d . x, its row) over the hull's vertices: their indices, nv of them,
     at value nf of the flat run ``fl``, their positions the rows of X (the hull's points
@@ -234,30 +342,53 @@ def _sinus_min(wx, wy, wz, px, py, pz, qx, qy, qz):
 
 
 @njit_inline
-def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, a0, a1,
-               a2, hA, roll, gap):
+def _planes_on_arc(s1x, s1y, s1z, s2x, s2y, s2z, n1x, n1y, n1z, n2x, n2y, n2z, d1, d2):
+    """The least over the arc from unit n1 to n2 of the larger of the planes s_1 . n and
+    s_2 . n (tangent to a convex, homogeneous f at n1 and n2: a lower bound of f there),
+    each on its side of their crossing; d1 = f(n1) - s_2 . n1, d2 = s_1 . n2 - f(n2).
+    -inf where they do not cross on the arc."""
+    if not (d1 >= 0.0 and d2 <= 0.0 and d1 - d2 > 0.0):
+        return -np.inf
+    cx, cy, cz = d1 * n2x - d2 * n1x, d1 * n2y - d2 * n1y, d1 * n2z - d2 * n1z
+    cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+    cx, cy, cz = cx / cn, cy / cn, cz / cn
+    return min(_sinus_min(s1x, s1y, s1z, n1x, n1y, n1z, cx, cy, cz),
+               _sinus_min(s2x, s2y, s2z, cx, cy, cz, n2x, n2y, n2z))
+
+
+@njit_inline
+def face_apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, sx, sy,
+                   sz, gap):
     """res = [-gap, n, pa, pb] for cores proved ``gap`` apart by the plane of the hull's
-    face of unit normal f (the hull's frame; m in E's, hA = h_E(m), a the squared
-    semi-axes): n from A to B, pa and pb the two cores' support points across the plane
-    (not the closest points, as cylcyl._apart_out's)."""
+    face of unit normal f (the hull's frame; m in the other shape's, s that shape's
+    core's support point along -m there): n from A to B, pa and pb the two cores'
+    support points across the plane (not the closest points, as cylcyl._apart_out's)."""
     u = _vertex_top(pts, fl, nf, nvx, fx, fy, fz)[1]
     px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
-    # E's core's support point along -m, E's frame: -L m / hA + roll m
-    ih = 1.0 / hA
-    sx, sy, sz = (roll - a0 * ih) * mx, (roll - a1 * ih) * my, (roll - a2 * ih) * mz
     res[0] = -gap
     if side == 0:
-        # A is E: n = -m; B's point into A's frame
+        # A is the other shape: n = -m; B's point into A's frame
         res[1], res[2], res[3] = -mx, -my, -mz
         res[4], res[5], res[6] = sx, sy, sz
         for c in range(3):
             res[7 + c] = r_ab[c, 0] * px + r_ab[c, 1] * py + r_ab[c, 2] * pz + t_ab[c]
         return
-    # A is the hull: n = f; E's point into A's frame
+    # A is the hull: n = f; the other's point into A's frame
     res[1], res[2], res[3] = fx, fy, fz
     res[4], res[5], res[6] = px, py, pz
     for c in range(3):
         res[7 + c] = r_ab[c, 0] * sx + r_ab[c, 1] * sy + r_ab[c, 2] * sz + t_ab[c]
+
+
+@njit_inline
+def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, a0, a1,
+               a2, hA, roll, gap):
+    """face_apart_out for E (hA = h_E(m), a the squared semi-axes)."""
+    # E's core's support point along -m, E's frame: -L m / hA + roll m
+    ih = 1.0 / hA
+    face_apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
+                   (roll - a0 * ih) * mx, (roll - a1 * ih) * my, (roll - a2 * ih) * mz,
+                   gap)
 
 
 @njit_kernel
@@ -281,28 +412,12 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     side = 0 if sa[0] == ELLIPSOID else 1
     ell = sa[1] if side == 0 else sb[1]
     hull = sb if side == 0 else sa
-    prm, v0, vn = hull[1], hull[2], hull[3]
-    nf, ne, nvx = int(prm[P_FAN_FACES]), int(prm[P_FAN_EDGES]), int(prm[P_FAN_VERTS])
+    v0, vn = hull[2], hull[3]
+    nf, ne, nvx, fnr, fe, fl = fan_run(hull[1], v0, vn, verts)
     if vn > FAN_MAX_POINTS or nf > HE_MAX_FACES:
         return HE_UNDECIDED
-    fnr = v0 + vn               # the face normals' rows, then the flat run
-    flat = fnr + nf             # offsets [0, nf), vertices [nf, nf + nvx), edges after
-    fe = nf + nvx
-    fl = verts[flat:flat + (nf + nvx + 4 * ne + 2) // 3].reshape(-1)
-    # the hull's pose in E's frame, in scalars (stores into the scratch rows could
-    # alias an array, and the compiler would reload it after each)
-    if side == 0:
-        r00, r01, r02 = r_ab[0, 0], r_ab[0, 1], r_ab[0, 2]
-        r10, r11, r12 = r_ab[1, 0], r_ab[1, 1], r_ab[1, 2]
-        r20, r21, r22 = r_ab[2, 0], r_ab[2, 1], r_ab[2, 2]
-        t0, t1, t2 = t_ab[0], t_ab[1], t_ab[2]
-    else:
-        r00, r01, r02 = r_ab[0, 0], r_ab[1, 0], r_ab[2, 0]
-        r10, r11, r12 = r_ab[0, 1], r_ab[1, 1], r_ab[2, 1]
-        r20, r21, r22 = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
-        t0 = -(r00 * t_ab[0] + r01 * t_ab[1] + r02 * t_ab[2])
-        t1 = -(r10 * t_ab[0] + r11 * t_ab[1] + r12 * t_ab[2])
-        t2 = -(r20 * t_ab[0] + r21 * t_ab[1] + r22 * t_ab[2])
+    # the hull's pose in E's frame
+    r00, r01, r02, r10, r11, r12, r20, r21, r22, t0, t1, t2 = hull_pose(side, r_ab, t_ab)
     a0, a1, a2 = ell[0] ** 2, ell[1] ** 2, ell[2] ** 2
     roll = ell[P_ROLL]
     V = rows[HE_V:HE_V + vn]
@@ -315,16 +430,8 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     # (= o + m . t): c inside all of them proves the overlap, and the plane it lies
     # farthest beyond is the one that most often proves the pair apart, before the
     # vertices and the full face pass are paid for
-    c0 = -(r00 * t0 + r10 * t1 + r20 * t2)
-    c1 = -(r01 * t0 + r11 * t1 + r21 * t2)
-    c2 = -(r02 * t0 + r12 * t1 + r22 * t2)
-    fmin, omin = 0, np.inf
-    for f in range(nf):
-        off = fl[f] - (verts[fnr + f, 0] * c0 + verts[fnr + f, 1] * c1
-                       + verts[fnr + f, 2] * c2)
-        Q[f, 1] = off
-        if off < omin:
-            omin, fmin = off, f
+    omin, fmin = least_offset(verts, fl, fnr, nf, r00, r01, r02, r10, r11, r12, r20, r21,
+                              r22, t0, t1, t2, Q)
     if not omin > 0.0:
         fx, fy, fz = verts[fnr + fmin, 0], verts[fnr + fmin, 1], verts[fnr + fmin, 2]
         mx = r00 * fx + r01 * fy + r02 * fz
@@ -408,17 +515,10 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
         s2x, s2y, s2z = -W[f2, 0] * i2 - vx, -W[f2, 1] * i2 - vy, -W[f2, 2] * i2 - vz
         c12 = s1x * n2x + s1y * n2y + s1z * n2z
         c21 = s2x * n1x + s2y * n1y + s2z * n1z
-        # tighter: the larger of the two planes over the arc itself, each on its side
-        # of their crossing
-        d1, d2 = g1 - c21, c12 - g2
-        if d1 >= 0.0 and d2 <= 0.0 and d1 - d2 > 0.0:
-            cx, cy, cz = d1 * n2x - d2 * n1x, d1 * n2y - d2 * n1y, d1 * n2z - d2 * n1z
-            cn = math.sqrt(cx * cx + cy * cy + cz * cz)
-            cx, cy, cz = cx / cn, cy / cn, cz / cn
-            lb = min(_sinus_min(s1x, s1y, s1z, n1x, n1y, n1z, cx, cy, cz),
-                     _sinus_min(s2x, s2y, s2z, cx, cy, cz, n2x, n2y, n2z))
-            if lb >= U - tol:
-                continue
+        # tighter: the larger of the two planes over the arc itself
+        if _planes_on_arc(s1x, s1y, s1z, s2x, s2y, s2z, n1x, n1y, n1z, n2x, n2y, n2z,
+                          g1 - c21, c12 - g2) >= U - tol:
+            continue
         # the 2-D problem in the plane normal to the edge: basis p = n1, q = e x p
         ex, ey, ez = V[ib, 0] - vx, V[ib, 1] - vy, V[ib, 2] - vz
         el = math.sqrt(ex * ex + ey * ey + ez * ez)
@@ -428,52 +528,19 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
         g11 = a0 * px * px + a1 * py * py + a2 * pz * pz
         g12 = a0 * px * qx + a1 * py * qy + a2 * pz * qz
         g22 = a0 * qx * qx + a1 * qy * qy + a2 * qz * qz
-        tr_ = 0.5 * (g11 + g22)
-        dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
-        lam0, lam1 = tr_ - dd, tr_ + dd
-        if not lam1 - lam0 > 1e-9 * lam1:
-            return HE_UNDECIDED
-        # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux)
-        if abs(g11 - lam0) > abs(g22 - lam0):
-            ux, uy = -g12, g11 - lam0
-        else:
-            ux, uy = g22 - lam0, -g12
-        un = math.sqrt(ux * ux + uy * uy)
-        ux, uy = ux / un, uy / un
-        # the point P: v's projection (on the arc f(n) = h_E(n) - n . v)
         wp, wq = px * vx + py * vy + pz * vz, qx * vx + qy * vy + qz * vz
-        P0 = ux * wp + uy * wq
-        P1 = -uy * wp + ux * wq
-        w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
-        small = 1e-24 * lam1 * scale * scale
-        if not (w0 > small and w1 > small):
+        k, ux, uy, P0, P1, lam0, lam1 = _plane_feet(g11, g12, g22, wp, wq, U, scale, roots)
+        if k < 0:
             return HE_UNDECIDED
-        k = 0
-        if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
-            roots[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
-            if not ok:
-                return HE_UNDECIDED
-            k = 1
-        if lam0 / math.sqrt(lam1) < U and abs(P0) * lam1 < U * (lam1 - lam0):
-            km = _roots_mid(lam0, lam1, lam1, w0, w1, 0.0, roots, k)
-            if km < 0:
-                return HE_UNDECIDED
-            k += km
         for r in range(k):
-            tt = roots[r]
-            N0, N1 = P0 / (lam0 + tt), P1 / (lam1 + tt)
-            nn = math.sqrt(N0 * N0 + N1 * N1)
-            val = -tt * nn
+            val, ap, aq = plane_foot(roots[r], P0, P1, lam0, lam1, ux, uy)
             if not val < U:
                 continue
-            c0, c1 = N0 / nn, N1 / nn
-            ap, aq = ux * c0 - uy * c1, uy * c0 + ux * c1
             nx, ny, nz = ap * px + aq * qx, ap * py + aq * qy, ap * pz + aq * qz
             # in the edge's arc: between n1 = p and n2 on their great circle (the plane
             # normal to the edge), where B's support along -n is attained at v
-            c2 = n2x * px + n2y * py + n2z * pz
-            s2 = n2x * qx + n2y * qy + n2z * qz
-            if not (aq * s2 >= 0.0 and (ap * s2 - aq * c2) * s2 >= 0.0):
+            if not _in_arc(ap, aq, n2x * px + n2y * py + n2z * pz,
+                           n2x * qx + n2y * qy + n2z * qz):
                 continue
             U = val
             bx, by, bz = nx, ny, nz

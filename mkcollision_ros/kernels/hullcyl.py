@@ -1,0 +1,368 @@
+"""A cylinder and a small convex hull in closed form and 1-D root searches, before GJK
+and EPA: the exact depth of the cylinder C and the hull B over B's normal fan, as
+hullell.py does for an ellipsoid (gjk_epa.gjk_epa_ws calls cylinder_hull_depth first for
+such a pair when the hull has its fan stored; where it decides nothing, cylcyl's
+hull_cylinder_depth, then GJK and EPA run as before).
+
+The problem, in C's frame (axis z, radius R, half-height H): the depth is min over unit
+n of f(n) = h_C(n) + h_B(-n), with h_C(n) = R |n_xy| + H |n_z|.  C's normal fan is its
+two caps' normals (the poles), its side's (the equator, a great circle) and its two
+rims' (the open hemispheres between); B's is its faces' normals, its edges' arcs and its
+vertices' cones.  The minimiser lies in a cell of the two fans' common refinement and is
+a critical point of f restricted to it:
+
+  * a pole, n = +-z: f = H -+ (B's lowest / highest z), whatever B's feature there;
+  * a face of B, n = -m: f = h_C(-m) + B's offset along m;
+  * the equator in a vertex's cone: f = R - n . v, least at n = v_xy / |v_xy|, where it
+    is R - |v_xy| (counts if B's support along -n is attained at v);
+  * the equator crossing an edge's arc: n = +-(z x e) / |z x e|, the one in the arc;
+  * a rim's hemisphere in an edge's arc: there C is the rim's disk, a flat ellipsoid
+    (squared semi-axes R^2, R^2, 0) centred at +-H z, and f on the arc is hullell's edge
+    problem for it (hullell._plane_feet: the disk projected along the edge is an ellipse
+    of semi-axes R and R |e_z|); a root counts if its n lies in the arc and in that
+    hemisphere;
+  * a rim's hemisphere in a vertex's cone: none.  There C's support is a rim point r
+    and f(n) = n . (r(n) - v); along the meridian through n, r stays put, so a critical
+    point (n parallel to r - v, f = |r - v| > 0) is a maximum along it, never a minimum.
+    (The boundary of A - B there is a curve, the rim less v, whose nearest point to the
+    origin inside lies at one of its ends' cells.)
+
+Pruning (U the least value found so far, from the faces' and the poles'): an edge's arc
+is skipped where f's tangent planes at its ends, the subgradients (s_i - v) . n with s_i
+C's support point at n_i, clear U over the chord between the ends (closed form from the
+faces' values; within the fan's tolerance, hullell.HE_FAN_SLACK), else over the arc
+itself (hullell._planes_on_arc).  An arc reaches a hemisphere only through an end in it
+(it is shorter than pi), so each edge solves at most the rims its ends' normals face.
+
+The rims' candidates skip the negative feet, and the rim-vertex cells hold no minimum
+only where f > 0, so all of it holds only for a pair that overlaps.  The kernel proves
+that where it is cheap (a hull vertex inside C, or C's centre inside B); else gjk_epa_ws
+runs GJK first and calls it again once GJK has found the cores overlapping, in place of
+EPA.  Before that, C's centre's offsets below the face planes: the plane it lies
+farthest beyond, the caps' planes, and in the face pass any face's plane, with C wholly
+beyond it by more than the caller's ``stop``, end the call with that gap as a bound (as
+GJK's first separating plane).  Near-degenerate edges (nearly square to the axis or
+along it: the projected rim a near-segment or a near-circle) and non-converging searches
+decide nothing (HE_UNDECIDED): GJK and EPA take the pair.
+
+The answer is for C and B's core (no rolling radius: a cylinder's core is itself):
+res = [U, n, pa, pb] as hullell's, the witnesses exact for the feature pair found (a
+rim point and the point U back along n; a vertex and the side's point level with it;
+an edge's point on the side's line; a cap's point over B's lowest vertex).
+
+Measured (pure Python, the first 300 of bench/deep_pairs.py's cylinder-convex cases,
+overlap given where GJK/EPA found it): every overlapping pair decided, depths within
+7.7e-9 * scale and normals within 1.5e-4 rad of GJK/EPA's (EPA's own tolerance).  On
+the row's deep pairs, per pair: ~43 faces, ~64 edges of which ~1.6 pass the chord bound
+and ~0.9 the arc bound, ~0.3 rim root searches.  The unpredictable branches (a face
+normal's sign along the axis, whether a vertex lies inside C) are copysign and max:
+as branches they cost ~0.4 us per pair in mispredictions.  Figures of time:
+BENCHMARKS.md (session 44).
+"""
+import math
+
+import numpy as np
+
+from .constants import CYLINDER, FAN_MAX_POINTS
+from .geometry import borrow_args
+from .hullell import (HE_APART, HE_EXACT, HE_FACES, HE_FAN_SLACK, HE_MAX_FACES,
+                      HE_SUPPORT_TOL, HE_UNDECIDED, HE_UNPROVED, HE_V, _in_arc,
+                      _plane_feet, _planes_on_arc, _vertex_top, face_apart_out, fan_run,
+                      fan_stored, hull_pose, least_offset, plane_foot)
+from .jit import borrow, njit_inline, njit_kernel
+
+
+@njit_inline
+def cylinder_hull_pair(sa, sb):
+    """A cylinder and a hull with its fan stored (hull.fan_rows), either order."""
+    return ((sa[0] == CYLINDER and fan_stored(sb[0], sb[1]))
+            or (sb[0] == CYLINDER and fan_stored(sa[0], sa[1])))
+
+
+@njit_inline
+def _cyl_point(big_r, big_h, dx, dy, dz):
+    """A point of the cylinder's support set along d (its own frame): the rim point, the
+    side's middle (d_z = 0) or the cap's centre (d_xy = 0)."""
+    s = math.sqrt(dx * dx + dy * dy)
+    z = big_h if dz > 0.0 else (-big_h if dz < 0.0 else 0.0)
+    if s > 0.0:
+        return big_r * dx / s, big_r * dy / s, z
+    return 0.0, 0.0, z
+
+
+@njit_inline
+def _out(res, side, r_ab, t_ab, h, nx, ny, nz, ax, ay, az, bx, by, bz):
+    """res = [h, n, pa, pb] in A's frame from n (from C to B), C's point a and B's point
+    b, all in C's frame."""
+    res[0] = h
+    if side == 0:
+        res[1], res[2], res[3] = nx, ny, nz
+        res[4], res[5], res[6] = ax, ay, az
+        res[7], res[8], res[9] = bx, by, bz
+        return
+    # A is the hull: C's frame into A's, the normal reversed
+    for c in range(3):
+        res[1 + c] = -(r_ab[c, 0] * nx + r_ab[c, 1] * ny + r_ab[c, 2] * nz)
+        res[4 + c] = r_ab[c, 0] * bx + r_ab[c, 1] * by + r_ab[c, 2] * bz + t_ab[c]
+        res[7 + c] = r_ab[c, 0] * ax + r_ab[c, 1] * ay + r_ab[c, 2] * az + t_ab[c]
+
+
+@njit_inline
+def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, big_r,
+               big_h, gap):
+    """hullell.face_apart_out for C."""
+    sx, sy, sz = _cyl_point(big_r, big_h, -mx, -my, -mz)
+    face_apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, sx, sy,
+                   sz, gap)
+
+
+@njit_inline
+def _cap_point(big_r, big_h, s, x, y):
+    """The point of C's cap (s = +-1) nearest to (x, y) in the axes' plane."""
+    q = math.sqrt(x * x + y * y)
+    k = big_r / q if q > big_r else 1.0
+    return k * x, k * y, s * big_h
+
+
+@njit_kernel
+def cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
+                        res):
+    """The exact depth of a cylinder and a hull's core with its fan stored (either
+    order; B's pose r_ab, t_ab in A's frame), by the module notes; arguments and outcomes
+    as hullell.ellipsoid_hull_depth's (``rows`` >= hullell.HE_ROWS rows)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    rows, roots, res = borrow(rows), borrow(roots), borrow(res)
+    side = 0 if sa[0] == CYLINDER else 1
+    cyl = sa[1] if side == 0 else sb[1]
+    hull = sb if side == 0 else sa
+    v0, vn = hull[2], hull[3]
+    nf, ne, nvx, fnr, fe, fl = fan_run(hull[1], v0, vn, verts)
+    if vn > FAN_MAX_POINTS or nf > HE_MAX_FACES:
+        return HE_UNDECIDED
+    # the hull's pose in C's frame
+    r00, r01, r02, r10, r11, r12, r20, r21, r22, t0, t1, t2 = hull_pose(side, r_ab, t_ab)
+    big_r, big_h = cyl[0], cyl[1]
+    r2 = big_r * big_r
+    V = rows[HE_V:HE_V + vn]
+    M = rows[HE_FACES:HE_FACES + nf]            # m, C's frame
+    Q = rows[HE_FACES + nf:HE_FACES + 2 * nf]   # (f(-m), offset, R / |m_xy|)
+    X = rows[HE_FACES + 2 * nf:HE_FACES + 2 * nf + vn]   # per vertex (|v_xy|, -, -)
+    pts = verts[v0:v0 + vn]
+    tol = HE_SUPPORT_TOL * scale
+    # C's centre c in the hull's frame and its offset below each face's plane (as
+    # hullell): all positive proves the overlap; the least is tried as a separating plane
+    omin, fmin = least_offset(verts, fl, fnr, nf, r00, r01, r02, r10, r11, r12, r20, r21,
+                              r22, t0, t1, t2, Q)
+    if not omin > 0.0:
+        fx, fy, fz = verts[fnr + fmin, 0], verts[fnr + fmin, 1], verts[fnr + fmin, 2]
+        mx = r00 * fx + r01 * fy + r02 * fz
+        my = r10 * fx + r11 * fy + r12 * fz
+        mz = r20 * fx + r21 * fy + r22 * fz
+        hC = big_r * math.sqrt(mx * mx + my * my) + big_h * abs(mz)
+        if -(hC + omin) > stop:
+            _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
+                       big_r, big_h, -(hC + omin))
+            return HE_APART
+    inside = omin > 0.0
+    # the vertices in C's frame, the lowest and the highest, and L, the depth in C of
+    # the deepest one inside (A - B holds C - v, so the depth is at least that)
+    zlo, zhi = np.inf, -np.inf
+    ilo = ihi = 0
+    L = 0.0
+    # and the least extent along the side's normal toward B's centre, h (horizontal)
+    hl = math.sqrt(t0 * t0 + t1 * t1)
+    hx, hy = (t0 / hl, t1 / hl) if hl > 0.0 else (1.0, 0.0)
+    smin, imin = np.inf, 0
+    for i in range(nvx):
+        u = int(fl[nf + i])
+        px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
+        x0 = r00 * px + r01 * py + r02 * pz + t0
+        x1 = r10 * px + r11 * py + r12 * pz + t1
+        x2 = r20 * px + r21 * py + r22 * pz + t2
+        V[u, 0], V[u, 1], V[u, 2] = x0, x1, x2
+        if x2 < zlo:
+            zlo, ilo = x2, u
+        if x2 > zhi:
+            zhi, ihi = x2, u
+        sd = x0 * hx + x1 * hy
+        if sd < smin:
+            smin, imin = sd, u
+        # (no branch: whether a vertex lies inside is random)
+        rho = math.sqrt(x0 * x0 + x1 * x1)
+        X[u, 0] = rho
+        L = max(L, min(big_h - abs(x2), big_r - rho))
+    inside = inside or L > 0.0
+    # B wholly beyond the side's tangent plane at R h
+    if smin - big_r > stop:
+        u = imin
+        _out(res, side, r_ab, t_ab, big_r - smin, hx, hy, 0.0, big_r * hx, big_r * hy,
+             min(max(V[u, 2], -big_h), big_h), V[u, 0], V[u, 1], V[u, 2])
+        return HE_APART
+    # B wholly above the top cap's plane or below the bottom's
+    for si in range(2):
+        gap = zlo - big_h if si == 0 else -zhi - big_h
+        if gap > stop:
+            s = 1.0 if si == 0 else -1.0
+            u = ilo if si == 0 else ihi
+            ax, ay, az = _cap_point(big_r, big_h, s, V[u, 0], V[u, 1])
+            _out(res, side, r_ab, t_ab, -gap, 0.0, 0.0, s, ax, ay, az, V[u, 0], V[u, 1],
+                 V[u, 2])
+            return HE_APART
+    # the pruning below holds only for a pair that overlaps: proved by the caller (GJK),
+    # a hull vertex inside C or C's centre inside B
+    if not (overlap or inside):
+        return HE_UNPROVED
+    # the best candidate: its value U, normal n and C's witness a (B's is a - U n)
+    U = np.inf
+    nx = ny = nz = ax = ay = az = 0.0
+    for f in range(nf):
+        fx, fy, fz = verts[fnr + f, 0], verts[fnr + f, 1], verts[fnr + f, 2]
+        mx = r00 * fx + r01 * fy + r02 * fz
+        my = r10 * fx + r11 * fy + r12 * fz
+        mz = r20 * fx + r21 * fy + r22 * fz
+        sm = math.sqrt(mx * mx + my * my)
+        val = Q[f, 1] + big_r * sm + big_h * abs(mz)
+        if not val > 0.0:
+            # C wholly beyond the face's plane (or NaN)
+            if -val > stop:
+                _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my,
+                           mz, big_r, big_h, -val)
+                return HE_APART
+            return HE_UNDECIDED
+        M[f, 0], M[f, 1], M[f, 2] = mx, my, mz
+        Q[f, 0], Q[f, 2] = val, big_r / sm if sm > 0.0 else 0.0
+        if val < U:
+            U = val
+            nx, ny, nz = -mx, -my, -mz
+            ax, ay, az = _cyl_point(big_r, big_h, nx, ny, nz)
+    # the poles: a cap over B's lowest vertex (n = z) or under its highest (n = -z)
+    for si in range(2):
+        val = big_h - zlo if si == 0 else big_h + zhi
+        if val < U:
+            s = 1.0 if si == 0 else -1.0
+            u = ilo if si == 0 else ihi
+            U = val
+            nx, ny, nz = 0.0, 0.0, s
+            ax, ay, az = V[u, 0], V[u, 1], s * big_h
+    # the side against a vertex: n = v_xy / |v_xy|, f = R - |v_xy|, a candidate only
+    # at least L (else it is not in the vertex's cone)
+    for i in range(nvx):
+        u = int(fl[nf + i])
+        rho = X[u, 0]
+        val = big_r - rho
+        if not (val < U and val >= L - tol and rho > 0.0):
+            continue
+        mx, my = V[u, 0] / rho, V[u, 1] / rho
+        # in the vertex's cone: B's support along -n attained at it (within tol)
+        if _vertex_top(V, fl, nf, nvx, -mx, -my, 0.0)[0] > -rho + tol:
+            continue
+        U = val
+        nx, ny, nz = mx, my, 0.0
+        ax, ay, az = big_r * mx, big_r * my, V[u, 2]
+    slack = tol + HE_FAN_SLACK * scale
+    for e in range(ne):
+        q = fe + 4 * e
+        f1, f2 = int(fl[q + 2]), int(fl[q + 3])
+        # f on the arc is at least the larger of its tangent planes at the ends,
+        # P_i(n) = (s_i - v) . n, v the edge's point; P_1(n2) = o2 - s_1 . m2 with v on
+        # face 2's plane (within the fan's tolerance), P_2(n1) likewise.  Over the chord
+        # the larger is least where the two cross, at the weights (d2, d1) of their
+        # gaps d_i = g_i - P_j(n_i) >= 0, and the arc lies beyond the chord (f is
+        # homogeneous and > 0)
+        g1, g2 = Q[f1, 0], Q[f2, 0]
+        m1x, m1y, m1z = M[f1, 0], M[f1, 1], M[f1, 2]
+        m2x, m2y, m2z = M[f2, 0], M[f2, 1], M[f2, 2]
+        # C's support points along -m1, -m2: s_i = -(k_i m_i,x, k_i m_i,y, H sgn m_i,z)
+        # (copysign: no branch on the signs, which are random; +-H alike at m_i,z = 0)
+        k1, k2 = Q[f1, 2], Q[f2, 2]
+        z1, z2 = math.copysign(big_h, -m1z), math.copysign(big_h, -m2z)
+        mxy = m1x * m2x + m1y * m2y
+        c12 = Q[f2, 1] + k1 * mxy - z1 * m2z
+        c21 = Q[f1, 1] + k2 * mxy - z2 * m1z
+        d1, d2 = g1 - c21, g2 - c12
+        if (d1 >= 0.0 and d2 >= 0.0 and d1 + d2 > 0.0
+                and d2 * g1 + d1 * c12 >= (U - slack) * (d1 + d2)):
+            continue
+        ia, ib = int(fl[q]), int(fl[q + 1])
+        vx, vy, vz = V[ia, 0], V[ia, 1], V[ia, 2]
+        n1x, n1y, n1z = -m1x, -m1y, -m1z
+        n2x, n2y, n2z = -m2x, -m2y, -m2z
+        s1x, s1y, s1z = -k1 * m1x - vx, -k1 * m1y - vy, z1 - vz
+        s2x, s2y, s2z = -k2 * m2x - vx, -k2 * m2y - vy, z2 - vz
+        c12 = s1x * n2x + s1y * n2y + s1z * n2z
+        c21 = s2x * n1x + s2y * n1y + s2z * n1z
+        if _planes_on_arc(s1x, s1y, s1z, s2x, s2y, s2z, n1x, n1y, n1z, n2x, n2y, n2z,
+                          g1 - c21, c12 - g2) >= U - tol:
+            continue
+        # the arc's great circle: basis p = n1, q = e x p; n2 = cq p + sq q
+        ex, ey, ez = V[ib, 0] - vx, V[ib, 1] - vy, V[ib, 2] - vz
+        el = math.sqrt(ex * ex + ey * ey + ez * ez)
+        ex, ey, ez = ex / el, ey / el, ez / el
+        px, py, pz = n1x, n1y, n1z
+        qx, qy, qz = ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px
+        cq = n2x * px + n2y * py + n2z * pz
+        sq = n2x * qx + n2y * qy + n2z * qz
+        # the side: the equator meets the circle at +-w, w = z x e / |z x e|
+        wl = math.sqrt(ex * ex + ey * ey)
+        if not wl > 1e-9:
+            return HE_UNDECIDED
+        wx, wy = -ey / wl, ex / wl
+        ap, aq = wx * px + wy * py, wx * qx + wy * qy
+        if not _in_arc(ap, aq, cq, sq):
+            wx, wy, ap, aq = -wx, -wy, -ap, -aq
+        cross = _in_arc(ap, aq, cq, sq)
+        fw = big_r - (wx * vx + wy * vy)
+        if cross:
+            val = fw
+            if val < U:
+                # B's witness: the edge's point b = v + lam e on the side's line at R w,
+                # t . b = 0 for t = z x w (t . e = -|z x e| != 0)
+                lam = (wy * vx - wx * vy) / (wx * ey - wy * ex)
+                lam = min(max(lam, 0.0), el)
+                U = val
+                nx, ny, nz = wx, wy, 0.0
+                ax, ay, az = vx + lam * ex + val * wx, vy + lam * ey + val * wy, vz + lam * ez
+        # the rims: C is the disk of the cap at s H there (its squared semi-axes R^2,
+        # R^2, 0), for the part of the arc in the hemisphere s n_z > 0
+        for si in range(2):
+            s = 1.0 if si == 0 else -1.0
+            if not (s * n1z > 0.0 or s * n2z > 0.0):
+                continue
+            if cross:
+                # this rim's part of the arc runs from the end in its hemisphere to w,
+                # where f's tangent plane is the rim's (C's support point R w + s H z):
+                # the larger of the two planes bounds f over it
+                if s * n1z > 0.0:
+                    sex, sey, sez, nex, ney, nez, ge = s1x, s1y, s1z, n1x, n1y, n1z, g1
+                else:
+                    sex, sey, sez, nex, ney, nez, ge = s2x, s2y, s2z, n2x, n2y, n2z, g2
+                swx, swy, swz = big_r * wx - vx, big_r * wy - vy, s * big_h - vz
+                if _planes_on_arc(sex, sey, sez, swx, swy, swz, nex, ney, nez, wx, wy, 0.0,
+                                  ge - (swx * nex + swy * ney + swz * nez),
+                                  sex * wx + sey * wy - fw) >= U - tol:
+                    continue
+            dz = vz - s * big_h
+            g11 = r2 * (px * px + py * py)
+            g12 = r2 * (px * qx + py * qy)
+            g22 = r2 * (qx * qx + qy * qy)
+            wp, wq = px * vx + py * vy + pz * dz, qx * vx + qy * vy + qz * dz
+            k, ux, uy, P0, P1, lam0, lam1 = _plane_feet(g11, g12, g22, wp, wq, U, scale,
+                                                        roots)
+            if k < 0:
+                return HE_UNDECIDED
+            for r in range(k):
+                val, bp, bq = plane_foot(roots[r], P0, P1, lam0, lam1, ux, uy)
+                if not val < U:
+                    continue
+                mx, my, mz = bp * px + bq * qx, bp * py + bq * qy, bp * pz + bq * qz
+                rho = math.sqrt(mx * mx + my * my)
+                if not (s * mz > 0.0 and rho > 0.0 and _in_arc(bp, bq, cq, sq)):
+                    continue
+                U = val
+                nx, ny, nz = mx, my, mz
+                ax, ay, az = big_r * mx / rho, big_r * my / rho, s * big_h
+    if not math.isfinite(U):
+        return HE_UNDECIDED
+    _out(res, side, r_ab, t_ab, U, nx, ny, nz, ax, ay, az, ax - U * nx, ay - U * ny,
+         az - U * nz)
+    return HE_EXACT

@@ -82,10 +82,9 @@ def test_hand_placed_edge_into_the_rim_and_apart_pairs():
     box = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-2, 2) for z in (-0.05, 0.05)])
     rot = _rot(np.array([1.0, 0.0, 0.0]), 0.1) @ _rot(np.array([0.0, 1.0, 0.0]), 0.6)
     tr = np.array([0.9, 0.1, 2.0])
-    # no vertex inside and the cylinder's centre outside the box: no proof of overlap
-    # without GJK's
-    assert _hand(box, rot, tr)[0] == HE_UNPROVED
-    got, res = _hand(box, rot, tr, overlap=True)
+    # no vertex inside and the cylinder's centre outside the box, but the box's centre
+    # lies in the cylinder (on its top cap): the overlap is proved without GJK's
+    got, res = _hand(box, rot, tr)
     plain = build_table([{"type": "cylinder", "radius": 1.0, "height": 4.0},
                          {"type": "convex", "points": box.tolist()}], prune=False)
     sc, sh = [(plain.codes[i], plain.params[i], plain.vrange[i, 0], plain.vrange[i, 1])

@@ -32,18 +32,23 @@ is skipped where f's tangent planes at its ends, the subgradients (s_i - v) . n 
 C's support point at n_i, clear U over the chord between the ends (closed form from the
 faces' values; within the fan's tolerance, hullell.HE_FAN_SLACK), else over the arc
 itself (hullell._planes_on_arc).  An arc reaches a hemisphere only through an end in it
-(it is shorter than pi), so each edge solves at most the rims its ends' normals face.
+(it is shorter than pi), so each edge solves at most the rims its ends' normals face;
+where the arc crosses the equator at w, a rim's part runs from its end to w and is
+bounded likewise by the planes there (at w C's support point on that rim, R w + s H z).
+A side-vertex candidate below L, the depth in C of the deepest hull vertex inside C,
+cannot lie in its vertex's cone (the depth is at least L), so it is not checked.
 
 The rims' candidates skip the negative feet, and the rim-vertex cells hold no minimum
 only where f > 0, so all of it holds only for a pair that overlaps.  The kernel proves
-that where it is cheap (a hull vertex inside C, or C's centre inside B); else gjk_epa_ws
-runs GJK first and calls it again once GJK has found the cores overlapping, in place of
-EPA.  Before that, C's centre's offsets below the face planes: the plane it lies
-farthest beyond, the caps' planes, and in the face pass any face's plane, with C wholly
-beyond it by more than the caller's ``stop``, end the call with that gap as a bound (as
-GJK's first separating plane).  Near-degenerate edges (nearly square to the axis or
-along it: the projected rim a near-segment or a near-circle) and non-converging searches
-decide nothing (HE_UNDECIDED): GJK and EPA take the pair.
+that where it is cheap (a hull vertex inside C, C's centre inside B, or C's point
+nearest B's origin inside B); else gjk_epa_ws runs GJK first and calls it again once GJK
+has found the cores overlapping, in place of EPA.  Before that, C's centre's offsets
+below the face planes: the plane it lies farthest beyond, the side's tangent plane
+toward B's centre, the caps' planes, and in the face pass any face's plane, with B
+wholly beyond it by more than the caller's ``stop``, end the call with that gap as a
+bound (as GJK's first separating plane).  Near-degenerate edges (nearly square to the
+axis or along it: the projected rim a near-segment or a near-circle) and non-converging
+searches decide nothing (HE_UNDECIDED): GJK and EPA take the pair.
 
 The answer is for C and B's core (no rolling radius: a cylinder's core is itself):
 res = [U, n, pa, pb] as hullell's, the witnesses exact for the feature pair found (a

@@ -1415,6 +1415,7 @@ def test_box_vertex_minimum_against_an_ellipsoid_is_the_depth():
             assert depth <= -sd + 1e-8 * scale
     assert found >= 25
 
+
 def _hull_cylinder_first(sa, sb, verts, r_ab, t_ab, scale, res):
     """What gjk_epa_ws tries first for a cylinder and a hull (contacts mode): hullcyl's
     exact depth or separating plane when the hull has its fan stored (stop: the

@@ -50,12 +50,19 @@ faces'):
 
 The pruning skips the negative feet of vertices outside E, so it holds only if E and B
 overlap.  The kernel proves that first where it is cheap: a hull vertex inside E or E's
-centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases).  Else
-gjk_epa_ws runs GJK and calls it again once GJK has found the cores overlapping, in
-place of EPA.  Before that, E's centre's offsets below the face planes (three products
-per face): the plane it lies farthest beyond is tried first for a separating plane,
-and one with E's core beyond it by more than the caller's ``stop`` ends the call with
-that gap as a bound (else GJK gives the distance); so does any face's in the full face
+centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases); else by GJK in
+E's unit-ball frame (E scaled to the unit ball by its inverse semi-axes, an affine map:
+the hull's image is a hull, so GJK there is a point against a polytope, on the
+vertices already in E's frame, with no square root per support).  That GJK decides the
+rest of the row's overlapping pairs in 1.4 steps on average and proves its pairs apart
+with bounding spheres overlapping that no face plane ends in 0.7 (bench/vs_mujoco.py's
+ellipsoid-convex row; a numpy prototype, /tmp).  Only where it decides nothing (its
+plane's gap within the caller's ``stop``, the cap) gjk_epa_ws runs GJK on the cores
+and calls the kernel again once GJK has found them overlapping, in place of EPA.
+Before all that, E's centre's offsets below the face planes (three products per
+face): the plane it lies farthest beyond is tried first for a separating plane, and
+one with E's core beyond it by more than the caller's ``stop`` ends the call with that
+gap as a bound (else GJK gives the distance); so does any face's in the full face
 pass.  Of the 715 pairs apart with bounding spheres overlapping in bench/vs_mujoco.py's
 row, 600 have such a face and the first one tried is one for 556.  On near-degenerate
 input (equal semi-axes, a point on an axis plane, a search that does not converge) it
@@ -77,8 +84,11 @@ from .constants import (CONVEX, ELLIPSOID, FAN_MAX_POINTS, P_FAN_EDGES, P_FAN_FA
                         P_FAN_VERTS, P_ROLL)
 from .geometry import borrow_args
 from .jit import borrow, njit_inline, njit_kernel
+from .simplex import _closest_simplex
 
 HE_ITERS = 60          # cap of every 1-D root search
+HE_BALL_ITERS = 32     # cap of the GJK steps in E's unit-ball frame (_unit_ball_test)
+HE_BALL_TOL = 1e-9     # a point of B that far (relative) inside the unit ball proves overlap
 HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
 HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
 HE_SUPPORT_TOL = 1e-12  # a foot counts if B's support along -n is within this * scale
@@ -318,6 +328,59 @@ def _vertex_top(X, fl, nf, nv, dx, dy, dz):
 
 
 @njit_inline
+def _unit_ball_test(V, fl, nf, nvx, b0, b1, b2, need, W, v, l3, lam, vol):
+    """Whether E and the hull overlap or are apart, decided in E's unit-ball frame:
+    there E (semi-axes 1 / b) is the unit ball and the hull's image x_hat = b x (x its
+    vertices in E's frame, the rows of V) is again a hull, so GJK for the point of that
+    hull nearest the origin decides the pair as far as it is run: a convex combination
+    v of the images with |v| < 1 is a point of B inside E; a direction v with the
+    images' least v . x_hat = m > |v| gives a plane between them.  That plane's normal
+    in E's frame is n ~ b v (the images' plane v . x_hat = c is (b v) . x = c there),
+    and the gap between E and B across it is (m - |v|) / |b v| (E's support along n is
+    |v| / |b v|, B's least n . x is m / |b v|).
+
+    Returns (1, ...) for the overlap; (2, gap, n) once a plane proves a gap above
+    ``need`` (n unit, from E toward B); (0, ...) undecided (the nearest point found
+    with the gap at most ``need``, or the cap).  W (4, 3), v, l3 (3,), lam, vol (4,):
+    scratch for the simplex."""
+    # start at the vertex whose image is nearest the origin
+    best, u0 = np.inf, int(fl[nf])
+    for i in range(nvx):
+        u = int(fl[nf + i])
+        x0, x1, x2 = b0 * V[u, 0], b1 * V[u, 1], b2 * V[u, 2]
+        rr = x0 * x0 + x1 * x1 + x2 * x2
+        if rr < best:
+            best, u0 = rr, u
+    W[0, 0], W[0, 1], W[0, 2] = b0 * V[u0, 0], b1 * V[u0, 1], b2 * V[u0, 2]
+    v[0], v[1], v[2] = W[0, 0], W[0, 1], W[0, 2]
+    n = 1
+    for _ in range(HE_BALL_ITERS):
+        vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+        if vv < 1.0 - HE_BALL_TOL:
+            return 1, 0.0, 0.0, 0.0, 0.0
+        # the images' support along -v: their least v . x_hat = (b v) . x
+        cx, cy, cz = b0 * v[0], b1 * v[1], b2 * v[2]
+        m, w = np.inf, u0
+        for i in range(nvx):
+            u = int(fl[nf + i])
+            s = cx * V[u, 0] + cy * V[u, 1] + cz * V[u, 2]
+            if s < m:
+                m, w = s, u
+        vn = math.sqrt(vv)
+        if m > vn:
+            cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+            gap = (m - vn) / cn
+            if gap > need:
+                return 2, gap, cx / cn, cy / cn, cz / cn
+        # no progress: v is the nearest point (within rounding)
+        if vv - m <= 1e-12 * vv:
+            return 0, 0.0, 0.0, 0.0, 0.0
+        W[n, 0], W[n, 1], W[n, 2] = b0 * V[w, 0], b1 * V[w, 1], b2 * V[w, 2]
+        n = _closest_simplex(W, W, W, n + 1, lam, v, l3, vol)
+    return 0, 0.0, 0.0, 0.0, 0.0
+
+
+@njit_inline
 def _sinus_min(wx, wy, wz, px, py, pz, qx, qy, qz):
     """min over the great-circle arc from unit p to unit q (angle < pi) of w . n."""
     a = wx * px + wy * py + wz * pz
@@ -398,15 +461,16 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     order; B's pose r_ab, t_ab in A's frame), by the module notes.  ``overlap``: the
     caller has proved that the pair overlaps (GJK on the cores).  ``stop`` (m): a face
     plane proving the cores farther apart than this ends the call (as GJK's).  ``rows``
-    (>= HE_ROWS, 3) and ``roots`` (>= 3,) are scratch.  Returns
+    (>= HE_ROWS, 3) and ``roots`` (>= 8,) are scratch.  Returns
 
     * HE_EXACT with res[:10] = [h, n (3), pa (3), pb (3)] in A's frame (h the cores'
       depth, n from A to B, pa and pb on the two cores, pb - pa == -h n);
     * HE_APART with res = [-g, n, pa, pb]: the cores are at least g > stop apart, n
       normal to a hull face's plane that separates them, pa and pb points of the cores
       (_apart_out);
-    * HE_UNPROVED (without ``overlap``, when neither a hull vertex inside E nor E's
-      centre inside B proves the overlap) or HE_UNDECIDED otherwise, res untouched."""
+    * HE_UNPROVED (without ``overlap``, when neither a hull vertex inside E, E's
+      centre inside B nor _unit_ball_test decides) or HE_UNDECIDED otherwise, res
+      untouched."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     rows, roots, res = borrow(rows), borrow(roots), borrow(res)
     side = 0 if sa[0] == ELLIPSOID else 1
@@ -462,9 +526,25 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
         if rr < 1.0:
             L = max(L, (1.0 - math.sqrt(rr)) * amin)
     # the pruning below skips negative feet, so the pair must be known to overlap: by
-    # the caller (GJK), a hull vertex inside E (L > 0) or E's centre inside B
+    # the caller (GJK), a hull vertex inside E (L > 0), E's centre inside B, or else
+    # GJK in E's unit-ball frame, which may as well find a plane proving the pair apart
     if not (overlap or inside or L > 0.0):
-        return HE_UNPROVED
+        ball, gap, nx, ny, nz = _unit_ball_test(
+            V, fl, nf, nvx, 1.0 / ell[0], 1.0 / ell[1], 1.0 / ell[2], stop - roll,
+            rows[HE_FACES:HE_FACES + 4], rows[HE_FACES + nf], rows[HE_FACES + nf + 1],
+            roots[0:4], roots[4:8])
+        if ball == 0:
+            return HE_UNPROVED
+        if ball == 2:
+            # the hull's outward normal toward E, m = -n (E's frame), f in the hull's
+            mx, my, mz = -nx, -ny, -nz
+            fx = r00 * mx + r10 * my + r20 * mz
+            fy = r01 * mx + r11 * my + r21 * mz
+            fz = r02 * mx + r12 * my + r22 * mz
+            hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
+            _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
+                       a0, a1, a2, hA, roll, roll + gap)
+            return HE_APART
     U = np.inf
     bx = by = bz = 0.0
     for f in range(nf):

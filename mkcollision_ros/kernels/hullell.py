@@ -466,8 +466,8 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     * HE_EXACT with res[:10] = [h, n (3), pa (3), pb (3)] in A's frame (h the cores'
       depth, n from A to B, pa and pb on the two cores, pb - pa == -h n);
     * HE_APART with res = [-g, n, pa, pb]: the cores are at least g > stop apart, n
-      normal to a hull face's plane that separates them, pa and pb points of the cores
-      (_apart_out);
+      normal to a plane that separates them (a hull face's or _unit_ball_test's), pa
+      and pb points of the cores (_apart_out);
     * HE_UNPROVED (without ``overlap``, when neither a hull vertex inside E, E's
       centre inside B nor _unit_ball_test decides) or HE_UNDECIDED otherwise, res
       untouched."""
@@ -529,6 +529,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     # the caller (GJK), a hull vertex inside E (L > 0), E's centre inside B, or else
     # GJK in E's unit-ball frame, which may as well find a plane proving the pair apart
     if not (overlap or inside or L > 0.0):
+        # (its simplex in the face rows W and M, not yet written)
         ball, gap, nx, ny, nz = _unit_ball_test(
             V, fl, nf, nvx, 1.0 / ell[0], 1.0 / ell[1], 1.0 / ell[2], stop - roll,
             rows[HE_FACES:HE_FACES + 4], rows[HE_FACES + nf], rows[HE_FACES + nf + 1],

@@ -264,7 +264,7 @@ def _cyl_gjk(V, fl, nf, nvx, big_r, big_h, t0, t1, t2, need):
             ax, ay, az = wx, wy, wz
         if not dx * dx + dy * dy + dz * dz > 0.0:
             return 0, 0.0, 0.0, 0.0, 0.0, u
-    return 0, 0.0, 0.0, 0.0, 0.0, 0
+    return 0, 0.0, 0.0, 0.0, 0.0, np.uint64(0)
 
 
 @njit_kernel

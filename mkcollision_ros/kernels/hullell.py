@@ -99,7 +99,8 @@ HE_MAX_FACES = 2 * FAN_MAX_POINTS - 4  # a polytope's faces, at most (Euler's fo
 HE_V = 0               # scratch rows (ellipsoid_hull_depth's ``rows``): the hull's points
                        # in E's frame (FAN_MAX_POINTS rows)
 HE_FACES = HE_V + FAN_MAX_POINTS  # ... per face m (a face's normal, E's frame) times
-HE_ROWS = HE_FACES + 3 * HE_MAX_FACES  # L, then m, then (h_E(m), offset, f(-m))
+HE_X = HE_FACES + 3 * HE_MAX_FACES  # L, then m, then (h_E(m), offset, f(-m)); then per
+HE_ROWS = HE_X + FAN_MAX_POINTS      # point (its ellipsoid norm rho in E, -, -)
 HE_APART = 2           # ellipsoid_hull_depth's outcomes: apart by more than ``stop``
 HE_EXACT = 1           # ... the depth, exact
 HE_UNPROVED = 0        # ... nothing, for want of a proof that the pair overlaps
@@ -317,10 +318,12 @@ def _in_arc(ap, aq, c2, s2):
 def _vertex_top(X, fl, nf, nv, dx, dy, dz):
     """(the largest d . x, its row) over the hull's vertices: their indices, nv of them,
     at value nf of the flat run ``fl``, their positions the rows of X (the hull's points
-    in its own frame, or in E's)."""
-    best, top = -np.inf, 0
+    in its own frame, or in E's).  (Indices as uint64 here and in the kernel's hot
+    loops: numba checks a signed index for wraparound on every access; ~4% of an apart
+    pair's kernel time and of the edge loop's, measured.)"""
+    best, top = -np.inf, np.uint64(0)
     for i in range(nv):
-        u = int(fl[nf + i])
+        u = np.uint64(int(fl[nf + i]))
         s = dx * X[u, 0] + dy * X[u, 1] + dz * X[u, 2]
         if s > best:
             best, top = s, u
@@ -488,6 +491,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     W = rows[HE_FACES:HE_FACES + nf]
     M = rows[HE_FACES + nf:HE_FACES + 2 * nf]
     Q = rows[HE_FACES + 2 * nf:HE_FACES + 3 * nf]
+    X = rows[HE_X:HE_X + vn]
     pts = verts[v0:v0 + vn]
     tol = HE_SUPPORT_TOL * scale
     # E's centre c in the hull's frame, and its offset below each face's plane, o - f . c
@@ -516,15 +520,16 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     # raised to a vertex's exact depth in E (its foot right of the pole) once found
     L = 0.0
     for i in range(nvx):
-        u = int(fl[nf + i])
+        u = np.uint64(int(fl[nf + i]))
         px, py, pz = pts[u, 0], pts[u, 1], pts[u, 2]
         x0 = r00 * px + r01 * py + r02 * pz + t0
         x1 = r10 * px + r11 * py + r12 * pz + t1
         x2 = r20 * px + r21 * py + r22 * pz + t2
         V[u, 0], V[u, 1], V[u, 2] = x0, x1, x2
-        rr = x0 * x0 * i0_ + x1 * x1 * i1_ + x2 * x2 * i2_
+        rho = math.sqrt(x0 * x0 * i0_ + x1 * x1 * i1_ + x2 * x2 * i2_)
+        X[u, 0] = rho
         # (no branch: whether a vertex lies inside is random; outside, the term is <= 0)
-        L = max(L, (1.0 - math.sqrt(rr)) * amin)
+        L = max(L, (1.0 - rho) * amin)
     # the pruning below skips negative feet, so the pair must be known to overlap: by
     # the caller (GJK), a hull vertex inside E (L > 0), E's centre inside B, or else
     # GJK in E's unit-ball frame, which may as well find a plane proving the pair apart
@@ -573,7 +578,7 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     slack = tol + HE_FAN_SLACK * scale
     for e in range(ne):
         q = fe + 4 * e
-        f1, f2 = int(fl[q + 2]), int(fl[q + 3])
+        f1, f2 = np.uint64(int(fl[q + 2])), np.uint64(int(fl[q + 3]))
         # f on the arc is at least the larger of its tangent planes at the arc's ends,
         # P_i(n) = (s_i - v) . n (s_i E's support point at n_i, v the edge's point).
         # P_1 is g1 at n1 and s_1 . n2 + o2 at n2 (v on face 2's plane, within the
@@ -640,22 +645,21 @@ def ellipsoid_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, 
     lmid = l0 / math.sqrt(l2)
     kmid = l1 / (l1 - l0)
     for i in range(nvx):
-        u = int(fl[nf + i])
+        u = np.uint64(int(fl[nf + i]))
         P0 = V[u, i0]
         # a root between the poles is a foot y on the far side along the least axis:
         # |y - x| >= |y_0| + |x_0| > |x_0| l1 / (l1 - l0)
-        x0, x1, x2 = V[u, 0], V[u, 1], V[u, 2]
-        rr = x0 * x0 * i0_ + x1 * x1 * i1_ + x2 * x2 * i2_
-        rho = math.sqrt(rr)
+        rho = X[u, 0]
         # (bitwise, not short-circuit: branches on whether a vertex lies inside are
         # random, and mispredicted cost ~5% of a deep pair's kernel time, measured)
-        ins = rr < 1.0
+        ins = rho < 1.0
         j0 = ins & ((1.0 - rho) * amax >= L - tol)
         mid = ((lmid < U) & (abs(P0) * kmid < U)
                & (ins | (2.0 * rroll + (rho - 1.0) * amin < U)))
         if not (j0 or mid):
             continue
         P1, P2 = V[u, i1], V[u, i2]
+        x0, x1, x2 = V[u, 0], V[u, 1], V[u, 2]
         w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
         small = 1e-24 * l2 * scale * scale
         if not (w0 > small and w1 > small and w2 > small):

@@ -87,7 +87,8 @@ from .jit import borrow, njit_inline, njit_kernel
 from .simplex import _closest_simplex
 
 HE_ITERS = 60          # cap of every 1-D root search
-HE_BALL_ITERS = 32     # cap of the GJK steps in E's unit-ball frame (_unit_ball_test)
+HE_BALL_ITERS = 32     # cap of the GJK steps in E's unit-ball frame (_unit_ball_test;
+                       # hullcyl._cyl_gjk's too)
 HE_BALL_TOL = 1e-9     # a point of B that far (relative) inside the unit ball proves overlap
 HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
 HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here

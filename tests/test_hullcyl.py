@@ -120,11 +120,10 @@ def test_gjk_decides_pairs_no_vertex_centre_or_plane_proves(swap):
     sc, sh = [(plain.codes[i], plain.params[i], plain.vrange[i, 0], plain.vrange[i, 1])
               for i in (0, 1)]
     out = np.zeros(C.OUT_SIZE)
-    z = np.array([0.0, 0.0, 1.0])
-    x = np.array([1.0, 0.0, 0.0])
+    x_axis, z_axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
     for angles, tr, stop in (((-0.6, 0.6), [1.15, 0.0, 1.93], np.inf),
                              ((0.1, -0.9), [1.88, 0.0, 2.12], 0.05)):
-        rot = _rot(x, angles[0]) @ _rot(z, angles[1])
+        rot = _rot(x_axis, angles[0]) @ _rot(z_axis, angles[1])
         tr = np.array(tr)
         gjk_epa(sc, sh, plain.verts, rot, tr, out)
         dist = out[C.OUT_DIST]

@@ -364,12 +364,8 @@ def _unit_ball_test(V, fl, nf, nvx, b0, b1, b2, need, W, v, l3, lam, vol):
             return 1, 0.0, 0.0, 0.0, 0.0
         # the images' support along -v: their least v . x_hat = (b v) . x
         cx, cy, cz = b0 * v[0], b1 * v[1], b2 * v[2]
-        m, w = np.inf, u0
-        for i in range(nvx):
-            u = int(fl[nf + i])
-            s = cx * V[u, 0] + cy * V[u, 1] + cz * V[u, 2]
-            if s < m:
-                m, w = s, u
+        top, w = _vertex_top(V, fl, nf, nvx, -cx, -cy, -cz)
+        m = -top
         vn = math.sqrt(vv)
         if m > vn:
             cn = math.sqrt(cx * cx + cy * cy + cz * cz)

@@ -31,7 +31,14 @@ same pose sequence.  One untimed warm-up step, then ``--steps`` timed steps; med
 "diff" is the symmetric difference between the engine's touching pairs and ours on the
 last step (ours: ``StepResult.pairs``).
 
+Scene operations (``--scene-ops``, ours only, density 0.2): the step with proximity off
+and at 0.1 m (proximity pairs per step), and the cost of one edit at each size: add a
+body, remove one, replace a body's shape, set the allowed pairs, change a setting
+(medians of ``--steps`` edits), and the first step after an add and a remove against a
+step without edits.
+
     PYTHONPATH=. .venv/bin/python bench/pipeline.py [--quick] [--sizes 100 1000 10000]
+    PYTHONPATH=. .venv/bin/python bench/pipeline.py --scene-ops --sizes 1000 10000 --engines
 """
 import argparse
 import os
@@ -271,6 +278,62 @@ def bench(sizes, densities, steps, seed, engines, skip_slow_above):
                 "collision / collide ratio"], rows)
 
 
+def _timed(fn):
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def bench_scene_ops(sizes, steps, seed):
+    """Proximity off / 0.1 m and one edit at a time, our pipeline only."""
+    prox_rows, edit_rows = [], []
+    for n in sizes:
+        bodies, pos, quat, _ = scene(n, 0.2, seed=seed)
+        rng = np.random.default_rng(seed + 1)
+        poses = []
+        for _ in range(steps + 1):
+            pos, quat = move(rng, pos, quat)
+            poses.append((pos.copy(), quat.copy()))
+        for prox in (0.0, 0.1):
+            p = Pipeline(bodies, PipelineConfig(proximity=prox))
+            p.warm_up()
+            times, n_prox = [], []
+            for k, (ps, qs) in enumerate(poses):
+                t0 = time.perf_counter()
+                res = p.step(ps, qs, float(k))
+                times.append({"total": time.perf_counter() - t0, **res.timings})
+                n_prox.append(len(res.proximity))
+            times = times[1:]
+            prox_rows.append([str(n), f"{prox:g}", str(int(np.median(n_prox[1:]))),
+                              _ms(_med(times, "total")), _ms(_med(times, "narrowphase")),
+                              _ms(_med(times, "classify"))])
+        p = Pipeline(bodies, PipelineConfig())
+        sc = p.scene
+        p.step(*poses[0], 0.0)
+        extra = {"name": "extra", "shape": bodies[6]["shape"], "pose": (pos[6], quat[6])}
+        ops = {"add a body": [], "remove a body": [], "replace a shape": [],
+               "set allowed pairs": [], "change a setting": [],
+               "step after add + remove": [], "step without edits": []}
+        for k in range(steps):
+            ops["add a body"].append(_timed(lambda: sc.add_body(extra)))
+            ops["remove a body"].append(_timed(lambda: sc.remove_body("extra")))
+            ops["step after add + remove"].append(_timed(lambda: p.step(stamp=k)))
+            ops["step without edits"].append(_timed(lambda: p.step(stamp=k)))
+            shape = bodies[(2 * k) % n]["shape"]
+            ops["replace a shape"].append(_timed(lambda: sc.replace_body(
+                {"name": "b1", "shape": shape})))
+            ops["set allowed pairs"].append(_timed(lambda: sc.set_allowed_pairs(
+                [["b0", "b2"], ["b3", f"b{n - 1}"]])))
+            ops["change a setting"].append(_timed(lambda: p.configure(
+                contact_margin=0.001 + 1e-4 * (k % 2))))
+        edit_rows.append([str(n)] + [_ms(float(np.median(v))) for v in ops.values()])
+    print("\n### Proximity pairs, our pipeline, median ms per step (density 0.2)\n")
+    _table(["bodies", "proximity m", "proximity pairs", "total", "narrowphase",
+            "classify"], prox_rows)
+    print("\n### One scene edit, median ms\n")
+    _table(["bodies"] + list(ops), edit_rows)
+
+
 def _table(head, rows):
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
@@ -289,9 +352,15 @@ def main():
     ap.add_argument("--skip-slow-above", type=int, default=10 ** 9,
                     help="skip the Python-callback engines (coal, fcl) above this size")
     ap.add_argument("--quick", action="store_true", help="sizes 100 and 300, 2 steps")
+    ap.add_argument("--scene-ops", action="store_true",
+                    help="proximity and scene-edit costs instead of the peer comparison")
     args = ap.parse_args()
     if args.quick:
         args.sizes, args.steps = [100, 300], 2
+    if args.scene_ops:
+        print(f"## Scene operations: sizes {args.sizes}, {args.steps} timed steps (median)")
+        bench_scene_ops(args.sizes, args.steps, args.seed)
+        return
     print(f"## Pipeline: sizes {args.sizes}, densities {args.densities}, "
           f"{args.steps} timed steps (median)\n")
     bench(args.sizes, args.densities, args.steps, args.seed, args.engines,

@@ -1,7 +1,8 @@
 """Persistent contacts: one arbiter per touching pair (box2d-lite's Arbiter, Bullet's
 persistent manifold, Jolt's contact listener for the events).
 
-An arbiter is keyed by the canonical pair ``(a, b)``, ``a < b`` (body indices).  Each
+An arbiter is keyed by the canonical pair ``(a, b)``, ``a < b`` (body slots, key
+``a * KEY_BASE + b``, scene.KEY_BASE, so keys do not change as a scene grows).  Each
 step it receives the pair's new contacts (world frame, from the manifold) and:
 
   1. refreshes its stored contacts: each is kept in the two bodies' local frames
@@ -26,7 +27,8 @@ step it receives the pair's new contacts (world frame, from the manifold) and:
 
 The arbiter of a pair is created when the pair starts touching (``began`` pair event)
 and removed when it separates (``ended``) or was not confirmed (narrow phase failed or
-did not run) for ``stale_steps`` steps.
+did not run) for ``stale_steps`` steps.  ``end_bodies`` ends every arbiter of given
+bodies at once (a body removed from the scene, or given a new shape).
 
 Events are an ``Events`` object: arrays ``kind`` (EV_BEGAN 0 / EV_PERSISTED 1 /
 EV_ENDED 2), ``body_a``, ``body_b``, ``contact_id`` (-1 for pair events), ordered by
@@ -43,6 +45,7 @@ costs microseconds for a few pairs and ~1 us per touching pair, with no Python l
 import numpy as np
 
 from .kernels.constants import ST_NOT_RUN
+from .scene import KEY_BASE
 from .kernels.manifold import (EV_BEGAN, EV_ENDED, EV_PERSISTED, MAX_MANIFOLD,
                                arbiter_step)
 
@@ -102,6 +105,11 @@ class Events:
     def __repr__(self):
         return f"Events({self.tolist()!r})"
 
+    @classmethod
+    def concat(cls, *parts):
+        """The events of ``parts`` one after the other."""
+        return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in cls.__slots__))
+
 
 def quat_matrices(quat_xyzw):
     """Rotation matrices float64 (N, 3, 3) of unit quaternions (N, 4) xyzw."""
@@ -122,23 +130,21 @@ def quat_matrices(quat_xyzw):
 class ArbiterSet:
     """All arbiters of a scene, as sorted arrays, and the contact id counter.
 
-    n_bodies; merge_distance (m) > 0, drift_threshold (m) > 0, max_contacts >= 1,
-    stale_steps >= 1.
+    merge_distance (m) > 0, drift_threshold (m) > 0, max_contacts >= 1,
+    stale_steps >= 1 (attributes, may change between steps).
 
-    State (read-only outside this class), arbiters sorted by key = a * n_bodies + b:
+    State (read-only outside this class), arbiters sorted by key = a * KEY_BASE + b:
       keys int64 (A,), unconfirmed int64 (A,): steps in a row without confirmation,
       start int64 (A + 1,): arbiter k's contacts are rows [start[k], start[k + 1]);
       contacts sorted by (key, id): c_id, c_age int64 (C,), c_la, c_lb float64 (C, 3)
       points in A's / B's body frame (m), c_na float64 (C, 3) normal in A's frame.
     """
 
-    def __init__(self, merge_distance, drift_threshold, max_contacts, stale_steps,
-                 n_bodies=None):
+    def __init__(self, merge_distance, drift_threshold, max_contacts, stale_steps):
         self.merge_distance = float(merge_distance)
         self.drift_threshold = float(drift_threshold)
         self.max_contacts = int(max_contacts)
         self.stale_steps = int(stale_steps)
-        self.n_bodies = n_bodies
         self.next_id = 0
         z = np.zeros(0, np.int64)
         self.keys = z
@@ -172,9 +178,7 @@ class ArbiterSet:
         Every other existing arbiter has separated and ends.
         Returns the Events.
         """
-        if self.n_bodies is None:
-            self.n_bodies = len(pos_w)
-        n = self.n_bodies
+        n = KEY_BASE
         tk = sorted(touching)
         cpts = np.zeros((len(tk), MAX_MANIFOLD, 7))
         cnormal = np.zeros((len(tk), 3))
@@ -198,7 +202,7 @@ class ArbiterSet:
         """Advance one step (array form).
 
         pos_w float64 (N, 3), quat_w float64 (N, 4) unit xyzw, both C-contiguous.
-        tkeys int64 (T,) sorted keys a * n_bodies + b of the touching pairs, with their
+        tkeys int64 (T,) sorted keys a * KEY_BASE + b of the touching pairs, with their
         manifolds in the first T rows of cpts float64 (>= T, MAX_MANIFOLD, 7), cnormal
         (>= T, 3), ccount int64 (>= T,) (see kernels.manifold.manifold_batch); ukeys
         int64 (U,) sorted keys of the pairs the narrow phase could not decide.
@@ -206,9 +210,7 @@ class ArbiterSet:
         and method codes, reported with their contacts (default ST_NOT_RUN / 0).
         Returns the Events.
         """
-        if self.n_bodies is None:
-            self.n_bodies = len(pos_w)
-        n = self.n_bodies
+        n = KEY_BASE
         t, u = len(tkeys), len(ukeys)
         if t_status is None:
             t_status = np.full(t, ST_NOT_RUN, np.int64)
@@ -246,6 +248,40 @@ class ArbiterSet:
                      "point_a": c[7], "point_b": c[8], "normal": c[9], "depth": c[10],
                      "status": c[11], "method": c[12]}
         return Events(*(x[:ne] for x in out_ev))
+
+    def end_bodies(self, slots):
+        """End every arbiter with a body in ``slots`` (int64 (K,)): they are removed and
+        their events returned (Events: each pair's ``ended``, then its contacts' by id)."""
+        slots = np.asarray(slots, np.int64)
+        if not len(self.keys) or not len(slots):
+            return Events.empty()
+        hit = np.isin(self._pairs[:, 0], slots) | np.isin(self._pairs[:, 1], slots)
+        if not hit.any():
+            return Events.empty()
+        counts = np.diff(self.start)
+        c_hit = np.repeat(hit, counts)
+        # events: one row per ended pair plus one per contact, pair rows first
+        ends = np.flatnonzero(hit)
+        n_ev = counts[ends] + 1
+        at = np.concatenate([[0], np.cumsum(n_ev)[:-1]])
+        total = int(n_ev.sum())
+        ev_a = np.repeat(self._pairs[ends, 0], n_ev)
+        ev_b = np.repeat(self._pairs[ends, 1], n_ev)
+        ev_id = np.full(total, -1, np.int64)
+        is_contact = np.ones(total, bool)
+        is_contact[at] = False
+        ev_id[is_contact] = self.c_id[c_hit]
+        ended = Events(np.full(total, EV_ENDED, np.int64), ev_a, ev_b, ev_id)
+        keep = ~hit
+        self.keys = self.keys[keep]
+        self.unconfirmed = self.unconfirmed[keep]
+        self._pairs = self._pairs[keep]
+        self.start = np.concatenate([[0], np.cumsum(counts[keep])]).astype(np.int64)
+        c_keep = ~c_hit
+        self.c_id, self.c_age = self.c_id[c_keep], self.c_age[c_keep]
+        self.c_la, self.c_lb, self.c_na = self.c_la[c_keep], self.c_lb[c_keep], self.c_na[c_keep]
+        self._con = {k: v[c_keep] for k, v in self._con.items()}
+        return ended
 
     def contacts(self, pos_w=None, quat_w=None):
         """Every stored contact in the world, ordered by pair then id: dict of arrays

@@ -21,7 +21,7 @@ import os
 
 import yaml
 
-from .shapes import shape_row, validate_pose
+from .scene import validate_body
 
 BODY_KEYS = {"static", "group", "mask", "position", "orientation"}
 SHAPE_KEYS = {"type", "radius", "radii", "size", "length", "height", "points", "mesh",
@@ -30,8 +30,9 @@ SHAPE_KEYS = {"type", "radius", "radii", "size", "length", "height", "points", "
 
 def bodies_from_flat(flat, base_dir=None):
     """``{"names": [...], "<name>.<key>": value, ...}`` -> list of body dicts
-    ``{"name", "shape", "static", "group", "mask"}``.  Raises ValueError naming the body
-    and the key for anything missing, unknown or invalid."""
+    ``{"name", "shape", "static", "group", "mask"}`` (and ``pose`` when given), checked
+    by ``scene.validate_body``.  Raises ValueError naming the body and the key for
+    anything missing, unknown or invalid."""
     names = flat.get("names")
     if not isinstance(names, (list, tuple)) or not names:
         raise ValueError("bodies.names must be a non-empty list of body names")
@@ -66,33 +67,18 @@ def bodies_from_flat(flat, base_dir=None):
             shape["points"] = pts
         if "mesh" in shape and base_dir is not None and not os.path.isabs(shape["mesh"]):
             shape["mesh"] = os.path.join(base_dir, shape["mesh"])
-        try:
-            shape_row(shape)
-        except ValueError as err:
-            raise ValueError(f"body '{name}': {err}") from None
-        body = {"name": name, "shape": shape,
-                "static": _bool(fields.get("static", False), name, "static"),
-                "group": _mask(fields.get("group", 1), name, "group"),
-                "mask": _mask(fields.get("mask", 0xFFFFFFFF), name, "mask")}
+        entry = {"name": name, "shape": shape}
+        entry.update({k: fields[k] for k in ("static", "group", "mask") if k in fields})
         if "position" in fields or "orientation" in fields:
-            body["pose"] = validate_pose((fields.get("position", [0.0, 0.0, 0.0]),
-                                          fields.get("orientation", [0.0, 0.0, 0.0, 1.0])),
-                                         f"body '{name}' initial pose")
-        bodies.append(body)
+            entry["pose"] = (fields.get("position", [0.0, 0.0, 0.0]),
+                             fields.get("orientation", [0.0, 0.0, 0.0, 1.0]))
+        body = validate_body(entry)
+        out = {"name": body.name, "shape": body.shape, "static": body.static,
+               "group": body.group, "mask": body.mask}
+        if body.pose is not None:
+            out["pose"] = body.pose
+        bodies.append(out)
     return bodies
-
-
-def _bool(value, name, key):
-    if not isinstance(value, bool):
-        raise ValueError(f"body '{name}': '{key}' must be true or false, got {value!r}")
-    return value
-
-
-def _mask(value, name, key):
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2 ** 63:
-        raise ValueError(f"body '{name}': '{key}' must be a non-negative integer bitmask, "
-                         f"got {value!r}")
-    return value
 
 
 def flatten(tree, prefix=""):

@@ -8,10 +8,11 @@ Topics (names are parameters, relative to the node's namespace):
 Services:
   ``check_collision``       mkcollision_msgs/srv/CheckCollision  stateless query
 
-One timer at ``rate_hz`` runs the pipeline on the newest poses once any pose has
-arrived; the ContactArray carries the stamp of the newest pose message.  Contacts
-involving a body that has not received a pose yet (and is not static or given an
-initial pose) are not published.
+The node owns one ``scene.Scene`` (bodies, filters, stamped poses); pose messages
+write into it.  One timer at ``rate_hz`` steps the pipeline on the newest poses once any
+pose has arrived; the ContactArray carries the stamp of the newest pose message.  A
+body that has not received a pose yet (and is not static or given an initial pose)
+does not collide.
 
 Bad input never stops the node: malformed messages are dropped, bad entries inside a
 message (unknown names, NaN, zero quaternions) are dropped one by one, each with a
@@ -36,9 +37,7 @@ from .config import bodies_from_params
 from .kernels import constants as C
 from .pipeline import Pipeline, PipelineConfig
 from .query import query_contacts
-from .results import ContactSet
-from .shapes import build_table
-from .world import PoseStore
+from .scene import Scene, pose_problems
 
 # name, default, description.  The type is the default's type; floats must be written
 # with a decimal point in YAML.  Bounds are checked in ``_read_parameters``.
@@ -46,7 +45,8 @@ PARAMETERS = (
     ("frame_id", "world", "frame of the poses and of every published point"),
     ("rate_hz", 30.0, "collision steps per second (> 0)"),
     ("method", "auto", "narrow-phase method: auto | gjk_epa | mpr"),
-    ("proximity", 0.0, "m; bounding boxes are grown by this (>= 0)"),
+    ("contact_margin", 0.001, "m (>= 0); a touching pair keeps touching within this gap"),
+    ("proximity", 0.0, "m (>= 0); pairs this close are measured (library: StepResult.proximity)"),
     ("merge_distance", 0.02, "m (> 0); a new contact this close to a stored one updates it"),
     ("drift_threshold", 0.01, "m (> 0); a stored contact whose points drift this far is dropped"),
     ("max_contacts", 4, "contacts kept per touching pair (>= 1)"),
@@ -74,27 +74,19 @@ class CollisionNode(Node):
         super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
                          **node_kwargs)
         self.cfg = self._read_parameters()
-        self.bodies = bodies_from_params(
+        bodies = bodies_from_params(
             {f"bodies.{k}": p.value
              for k, p in self.get_parameters_by_prefix("bodies").items()})
-        names = [b["name"] for b in self.bodies]
-        static = [b["static"] or "pose" in b for b in self.bodies]
-        self.poses = PoseStore(names, static)
-        for i, body in enumerate(self.bodies):
-            if "pose" in body:
-                self.poses.positions[i], self.poses.orientations[i] = body["pose"]
-        self.static = np.array([b["static"] for b in self.bodies])
-        self.table = build_table([b["shape"] for b in self.bodies])
-        self.pipeline = Pipeline([{k: v for k, v in b.items() if k != "pose"}
-                                  for b in self.bodies], config=PipelineConfig(
-            method=self.cfg["method"], proximity=self.cfg["proximity"],
-            merge_distance=self.cfg["merge_distance"],
+        self.scene = Scene(bodies)
+        self.pipeline = Pipeline(self.scene, config=PipelineConfig(
+            method=self.cfg["method"], contact_margin=self.cfg["contact_margin"],
+            proximity=self.cfg["proximity"], merge_distance=self.cfg["merge_distance"],
             drift_threshold=self.cfg["drift_threshold"], max_contacts=self.cfg["max_contacts"],
             stale_steps=self.cfg["stale_steps"]))
         t0 = time.perf_counter()
         self.pipeline.warm_up()
         self.get_logger().info(
-            f"{len(names)} bodies loaded; kernels ready in {time.perf_counter() - t0:.2f} s")
+            f"{len(self.scene)} bodies loaded; kernels ready in {time.perf_counter() - t0:.2f} s")
 
         reliable = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
         self.sub_named = self.create_subscription(
@@ -105,6 +97,8 @@ class CollisionNode(Node):
         self.pub_markers = self.create_publisher(MarkerArray, self.cfg["markers_topic"], 10)
         self.srv_check = self.create_service(CheckCollision, "check_collision",
                                              self._on_check_collision)
+        # PoseArray poses go to the configured bodies in their order
+        self.order = np.array([self.scene.index[b["name"]] for b in bodies], np.int64)
         self.stamp = None
         self.steps = 0
         self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
@@ -125,6 +119,7 @@ class CollisionNode(Node):
             cfg[name] = value
         checks = (
             ("rate_hz", cfg["rate_hz"] > 0.0), ("proximity", cfg["proximity"] >= 0.0),
+            ("contact_margin", cfg["contact_margin"] >= 0.0),
             ("merge_distance", cfg["merge_distance"] > 0.0),
             ("drift_threshold", cfg["drift_threshold"] > 0.0),
             ("max_contacts", cfg["max_contacts"] >= 1), ("stale_steps", cfg["stale_steps"] >= 1),
@@ -152,17 +147,18 @@ class CollisionNode(Node):
         except ValueError as err:
             self._warn(f"dropped a BodyPoseArray: {err}")
             return
-        _, problems = self.poses.update_named(names, pos, quat)
+        _, problems = self.scene.set_poses(names, pos, quat, _seconds(msg.header.stamp))
         self._accept(msg.header.stamp, problems, "BodyPoseArray")
 
     def _on_pose_array(self, msg):
-        n = len(self.poses.names)
+        n = len(self.order)
         if len(msg.poses) != n:
             self._warn(f"dropped a PoseArray with {len(msg.poses)} poses: the node has {n} "
                        f"bodies, and PoseArray poses are matched to bodies by order")
             return
         pos, quat = msg_adapters.pose_array_to_arrays(msg)
-        _, problems = self.poses.update_indexed(np.arange(n), pos, quat)
+        _, problems = self.scene.set_poses_at(self.order, pos, quat,
+                                              _seconds(msg.header.stamp))
         self._accept(msg.header.stamp, problems, "PoseArray")
 
     def _accept(self, stamp, problems, kind):
@@ -176,17 +172,12 @@ class CollisionNode(Node):
     def _on_timer(self):
         if self.stamp is None:
             return
-        t = self.stamp.sec + 1e-9 * self.stamp.nanosec
         try:
-            res = self.pipeline.step(self.poses.positions, self.poses.orientations, t)
+            res = self.pipeline.step(stamp=_seconds(self.stamp))
         except Exception as err:  # noqa: BLE001 - the node must keep running
             self.get_logger().error(f"collision step failed, skipped: {err!r}",
                                     throttle_duration_sec=self.cfg["warn_throttle_s"])
             return
-        known = self.poses.known
-        keep = known[res.body_a] & known[res.body_b]
-        if not keep.all():
-            res = ContactSet.select(res, keep)
         self.steps += 1
         frame = self.cfg["frame_id"]
         self.pub_contacts.publish(
@@ -212,27 +203,33 @@ class CollisionNode(Node):
         return response
 
     def _check(self, request):
-        names = list(request.names) or list(self.poses.names)
-        unknown = [n for n in names if n not in self.poses.index]
+        sc = self.scene
+        names = list(request.names) or [n for n in sc.names if n is not None]
+        unknown = [n for n in names if n not in sc]
         if unknown:
             raise ValueError(f"unknown bodies: {unknown}")
         if len(set(names)) != len(names):
             raise ValueError("names has duplicates")
-        idx = np.array([self.poses.index[n] for n in names], dtype=np.int64)
-        pos, quat = self.poses.positions.copy(), self.poses.orientations.copy()
-        known = self.poses.known.copy()
+        idx = np.array([sc.index[n] for n in names], dtype=np.int64)
+        pos, quat = sc.positions.copy(), sc.orientations.copy()
+        posed = sc.posed.copy()
         if len(request.positions) or len(request.orientations):
-            given = PoseStore(names)
             _, gp, gq = msg_adapters.body_pose_array_to_arrays(request)
-            _, problems = given.update_indexed(np.arange(len(names)), gp, gq)
-            if problems:
-                raise ValueError("bad poses: " + "; ".join(problems))
-            pos[idx], quat[idx], known[idx] = given.positions, given.orientations, True
-        missing = [n for n, i in zip(names, idx) if not known[i]]
-        idx = idx[known[idx]]
-        contacts = query_contacts(self.table, self.poses.names, idx, pos, quat, self.static,
+            bad = [f"{n}: {why}" for n, why in zip(names, pose_problems(gp, gq)) if why]
+            if bad:
+                raise ValueError("bad poses: " + "; ".join(bad))
+            pos[idx], quat[idx] = gp, gq / np.linalg.norm(gq, axis=1)[:, None]
+            posed[idx] = True
+        missing = [n for n, i in zip(names, idx) if not posed[i]]
+        idx = idx[posed[idx]]
+        contacts = query_contacts(sc.table, sc.names, idx, pos, quat, sc.static,
                                   METHODS[self.cfg["method"]])
         return contacts, missing
+
+
+def _seconds(stamp):
+    """builtin_interfaces/Time -> float seconds."""
+    return stamp.sec + 1e-9 * stamp.nanosec
 
 
 def main(args=None):

@@ -1,69 +1,81 @@
-"""The scene pipeline: poses in, persistent contacts out.  Plain Python, no rclpy.
+"""The scene pipeline: a scene's poses in, persistent contacts and proximity pairs out.
+Plain Python + numba, no rclpy.
 
     from mkcollision_ros.pipeline import Pipeline, PipelineConfig
-    p = Pipeline(bodies, config=PipelineConfig())
-    res = p.step(positions, orientations, stamp)      # -> StepResult
+    p = Pipeline(bodies, config=PipelineConfig())      # or Pipeline(scene)
+    res = p.step(positions, orientations, stamp)       # -> StepResult
+    p.scene.add_body({...}); p.scene.remove_body("crate")   # edits between steps
+    p.configure(contact_margin=0.002, method="mpr")          # settings between steps
+    res = p.step()                                     # the scene's own poses
 
 One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
-  bounds       world AABBs of every body from its support function (kernels/broadphase)
-  broadphase   a hashed uniform grid: exactly the pairs whose AABBs (grown by
-               proximity / 2 each) overlap; planes against every body reaching their
-               half-space
+  edits        arbiters of bodies removed or given a new shape since the last step end,
+               with events (scene.take_ended, ArbiterSet.end_bodies)
+  bounds       world AABBs of every body from its support function (kernels/broadphase),
+               grown by half the reach, reach = max(contact_margin, proximity)
+  broadphase   a hashed uniform grid: exactly the pairs whose grown AABBs overlap;
+               planes against every body reaching their half-space; only bodies that
+               have a pose take part
   filter       drop static-static pairs, pairs failing the group/mask test
-               ``(group_i & mask_j) and (group_j & mask_i)``, and the allowed pairs
-               (``config.allowed_pairs``, names, MoveIt's allowed-collision idea)
-  narrowphase  kernels/narrowphase.collide_batch with ``config.method``; pairs with a
-               plane always use the closed form (``auto``), as GJK/EPA and MPR do not
-               take unbounded shapes.  Distance cutoff 0 (contacts only): only
-               touching pairs are kept, so a pair stops as soon as it is proved apart
-               (bounding spheres, a box-box separating axis, GJK's bound) instead of
-               refining a distance nobody reads
+               ``(group_i & mask_j) and (group_j & mask_i)``, and the scene's allowed
+               pairs (MoveIt's allowed-collision idea)
+  narrowphase  kernels/narrowphase.collide_batch with ``config.method``, exact up to the
+               reach (farther pairs stop at a certified lower bound); pairs with a plane
+               always use the closed form (``auto``), as GJK/EPA and MPR do not take
+               unbounded shapes
+  classify     touching pairs (the narrow phase's touching rule, the same as
+               ``collide``'s, or an existing arbiter within ``contact_margin``: the
+               hysteresis below), proximity pairs, and undecided pairs (failed, not run)
   manifold     face clipping for face-on-face contacts (kernels/manifold), else one point
   arbiters     persistent contacts with stable ids and events (arbiters.py)
 
+Contact margin (Bullet's contact breaking threshold): a pair begins touching when the
+narrow phase finds it touching or penetrating (signed distance <= TOUCH_TOL x scale,
+the rule ``collide`` uses, so a fresh pair touches in the pipeline iff ``collide`` says
+so), and keeps touching, with its contacts and ids, while its distance stays within
+``contact_margin``; it ends beyond.  The default, 1 mm, is above the jitter of a
+resting body in a simulator or under motion capture (micrometres to a fraction of a
+millimetre a frame), so a pair at rest does not end and begin again every frame, and
+well below the size of the parts a robot handles, so a pair that lifts off ends within
+a millimetre.  A held pair's contacts have depth 0, status TOUCHING and
+``point_b - point_a`` the (positive) gap along the normal.
+
+Proximity: pairs within ``proximity`` (m) that are not touching come back in
+``StepResult.proximity`` with their signed distance, closest points and normal (the
+narrow phase's exact distance); they have no arbiters.
+
 Frames and signs (see results.py): world frame, metres; normals unit from body_a to
-body_b with body_a < body_b; depth >= 0; point_b - point_a = -depth * normal for a
-penetrating contact.  Quaternions are xyzw.
+body_b with body_a < body_b (scene slots); depth >= 0; point_b - point_a = -depth *
+normal for a penetrating contact.  Quaternions are xyzw.
 """
 import contextlib
+import dataclasses
 import math
 import time
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
 from .arbiters import ArbiterSet, Events
 from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world_aabbs
-from .kernels.constants import M_AUTO, METHOD_NAMES, OUT_SIZE, PLANE, ST_FAILED
+from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_NORMAL, OUT_PA,
+                                OUT_PB, OUT_SIZE, ST_FAILED, ST_SEPARATED, ST_TOUCHING)
 from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
 from .kernels.narrowphase import collide_batch
 from .results import ContactSet
-from .shapes import build_table
-
-# distance cutoff of the narrow phase (m): the step keeps touching pairs only
-_CONTACTS_ONLY = 0.0
+from .scene import KEY_BASE, Scene
 
 PIPELINE_METHODS = ("auto", "gjk_epa", "mpr")
-BODY_KEYS = {"name", "shape", "static", "group", "mask"}
-MAX_BITS = 0xFFFFFFFF
 # narrow-phase batches at least this long run on all of numba's threads, shorter ones
-# with numba.set_num_threads(1): waking a second thread costs up to milliseconds on a
-# loaded machine.  256 pairs are ~0.5-2 ms of work (2-10 us a pair); on the 1,000-body
-# bench scene (442 pairs) two threads took the narrow phase from 2.2 to 1.65 ms (it was
-# 2048 while a pair cost 3-4x more).  Same compiled kernels, so the same numbers.
+# on one: waking a second thread costs up to milliseconds on a loaded machine, and 256
+# pairs are ~0.5-2 ms of work (2-10 us a pair)
 PARALLEL_MIN_ITEMS = 256
-# the same for the cheap phases (bounds, broad phase, manifolds: 0.02-1 us per item).
-# Measured on the shared 2-core machine (bench scenes, 10,000 bodies): two threads made
-# the bounds 15-30x SLOWER (0.2 ms on one thread, 5-7 ms on two while the other core
-# was busy) and the broad phase 1.5-3x slower; a parallel region only pays when the
-# second core is idle and the work is many milliseconds.  Re-measured in session 3
-# (bench scenes, whole step, threshold 200,000 vs 1,000): with the other core idle, two
-# threads were 5-12% faster (1k bodies 1.47 -> 1.46 and 8.0 -> 7.0 ms; 10k 12.5 -> 11.0
-# and 80.7 -> 71.6 ms); with a busy loop on the other core, 10k bodies at density 2
-# went 128-135 -> 154 ms (broad phase 13 -> 24 ms).  A node runs beside other work, so
-# the default stays on one thread; set ``Pipeline.parallel_min_cheap_items`` lower on
-# a machine with idle cores.
+# the same for the cheap phases (bounds, broad phase, manifolds: 0.02-1 us per item):
+# they gain from a second thread only when it is idle and the work is many
+# milliseconds, and lose several times over when the other core is busy, as beside
+# other work in a robot; ``Pipeline.parallel_min_cheap_items`` lowers it
 PARALLEL_MIN_CHEAP_ITEMS = 200_000
 
 
@@ -81,12 +93,22 @@ def _threads(n_items, parallel_min):
         numba.set_num_threads(before)
 
 
+def _number_ok(v, lo, strict):
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer,
+                                                             np.floating)):
+        return False
+    return math.isfinite(v) and (v > lo if strict else v >= lo)
+
+
 @dataclass
 class PipelineConfig:
-    """Settings of a Pipeline (SI units).
+    """Settings of a Pipeline (SI units); ``Pipeline.configure`` changes them between
+    steps.
 
     method          "auto" (closed forms, else GJK/EPA), "gjk_epa" or "mpr"
-    proximity       m >= 0: pairs whose AABBs are this close are candidates
+    contact_margin  m >= 0: a touching pair keeps touching while its distance is within
+                    this (the hysteresis in the module docstring)
+    proximity       m >= 0: pairs this close but not touching are proximity pairs
     merge_distance  m > 0: a new contact this close to a stored one keeps its id
     drift_threshold m > 0: a stored contact whose points separate along the normal, or
                     slide across it, by more than this is dropped; clipped manifold
@@ -94,53 +116,70 @@ class PipelineConfig:
     max_contacts    >= 1 contacts per pair (deepest plus largest area)
     stale_steps     >= 1: steps a touching pair survives without the narrow phase
                     confirming it (failed / not run) before it ends
-    allowed_pairs   [[name, name], ...] pairs that never collide
     """
     method: str = "auto"
+    contact_margin: float = 0.001
     proximity: float = 0.0
     merge_distance: float = 0.02
     drift_threshold: float = 0.01
     max_contacts: int = 4
     stale_steps: int = 3
-    allowed_pairs: list = field(default_factory=list)
 
     @classmethod
     def from_dict(cls, d):
         """Build from a dict (YAML); unknown keys raise ValueError."""
         if not isinstance(d, dict):
             raise ValueError(f"pipeline config must be a dict, got {d!r}")
-        known = {f.name for f in fields(cls)}
-        unknown = set(d) - known
+        cfg = cls()
+        return cfg.replace(**d)
+
+    def replace(self, **changes):
+        """A validated copy with ``changes``; ValueError naming the setting and the
+        reason, for an unknown name or a bad value."""
+        known = {f.name for f in fields(self)}
+        unknown = set(changes) - known
         if unknown:
-            raise ValueError(f"pipeline config: unknown key(s) {sorted(unknown)}; "
+            raise ValueError(f"pipeline config: unknown setting(s) {sorted(unknown)}; "
                              f"expected {sorted(known)}")
-        cfg = cls(**d)
-        cfg.validate()
-        return cfg
+        new = dataclasses.replace(self, **changes)
+        new.validate()
+        return new
 
     def validate(self):
-        """Raise ValueError naming the first bad setting."""
+        """Raise ValueError naming the first bad setting and why."""
         if self.method not in PIPELINE_METHODS:
             raise ValueError(f"pipeline config: method must be one of {PIPELINE_METHODS}, "
                              f"got {self.method!r}")
-        for name, lo, strict in (("proximity", 0.0, False), ("merge_distance", 0.0, True),
-                                 ("drift_threshold", 0.0, True)):
+        for name, strict in (("contact_margin", False), ("proximity", False),
+                             ("merge_distance", True), ("drift_threshold", True)):
             v = getattr(self, name)
-            if (isinstance(v, bool) or not isinstance(v, (int, float))
-                    or not math.isfinite(v) or (v <= lo if strict else v < lo)):
+            if not _number_ok(v, 0.0, strict):
                 raise ValueError(f"pipeline config: {name} must be a finite number "
-                                 f"{'>' if strict else '>='} {lo}, got {v!r}")
+                                 f"{'>' if strict else '>='} 0 (m), got {v!r}")
         for name in ("max_contacts", "stale_steps"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"pipeline config: {name} must be an integer >= 1, got {v!r}")
-        if not isinstance(self.allowed_pairs, (list, tuple)):
-            raise ValueError("pipeline config: allowed_pairs must be a list of [name, name]")
-        for p in self.allowed_pairs:
-            if (not isinstance(p, (list, tuple)) or len(p) != 2
-                    or not all(isinstance(x, str) for x in p)):
-                raise ValueError(f"pipeline config: allowed_pairs entries must be "
-                                 f"[name, name], got {p!r}")
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
+                    or v < 1:
+                raise ValueError(f"pipeline config: {name} must be an integer >= 1, "
+                                 f"got {v!r}")
+
+
+@dataclass
+class ProximitySet:
+    """Pairs within the proximity distance that do not touch, world frame, metres.
+
+    body_a, body_b int64 (P,) slots (a < b), sorted; distance float64 (P,) > 0;
+    point_a, point_b float64 (P, 3) closest points on A and B; normal float64 (P, 3)
+    unit, A -> B, with point_b - point_a = distance * normal."""
+    body_a: np.ndarray
+    body_b: np.ndarray
+    distance: np.ndarray
+    point_a: np.ndarray
+    point_b: np.ndarray
+    normal: np.ndarray
+
+    def __len__(self):
+        return len(self.body_a)
 
 
 @dataclass
@@ -148,125 +187,119 @@ class StepResult(ContactSet):
     """Contacts of one step, world frame, metres; C contacts over K touching pairs.
     The contact fields are those of ``results.ContactSet``; a step adds the rest.
 
-    names list[str] (N,); stamp float (s, as given)
+    names list[str | None] (S,) slot -> name (None: a free slot); stamp float (s)
     pairs int64 (K, 2): touching pairs (a < b), sorted
-    body_a, body_b int64 (C,); contact_id int64 (C,) stable while the contact persists;
-    age int64 (C,) steps since it began (0 on its first step)
+    body_a, body_b int64 (C,) slots; contact_id int64 (C,) stable while the contact
+    persists; age int64 (C,) steps since it began (0 on its first step)
     position (C, 3) midpoint of the witness points; point_a, point_b (C, 3) on A and B;
     normal (C, 3) unit, A -> B; depth (C,) >= 0
     method int64 (C,) method code of the pair's narrow phase (constants.M_*);
     status int64 (C,) the pair's status this step (constants.ST_*)
+    proximity ProximitySet: near pairs that do not touch (empty when proximity is 0)
     events arbiters.Events: arrays kind (EV_BEGAN / EV_PERSISTED / EV_ENDED), body_a,
         body_b, contact_id (-1 for pair events); iterates as tuples (kind name
-        "began" / "persisted" / "ended", body_a, body_b, contact_id)
-    names is the pipeline's own list (shared between steps: do not modify it)
-    timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the filter;
-    n_narrowphase_pairs: pairs after the filter
+        "began" / "persisted" / "ended", body_a, body_b, contact_id).  The pairs ended
+        by edits (a removed body) come first.
+    names is the scene's own list (do not modify it)
+    timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the
+    filter; n_narrowphase_pairs: pairs after the filter
     """
     stamp: float
     pairs: np.ndarray
+    proximity: ProximitySet
     events: Events
     timings: dict
     n_candidate_pairs: int
     n_narrowphase_pairs: int
 
 
-def _validate_bodies(bodies):
-    if not isinstance(bodies, (list, tuple)) or not bodies:
-        raise ValueError("bodies must be a non-empty list of dicts")
-    names, shapes, static, group, mask = [], [], [], [], []
-    for k, b in enumerate(bodies):
-        if not isinstance(b, dict):
-            raise ValueError(f"body {k}: must be a dict, got {b!r}")
-        unknown = set(b) - BODY_KEYS
-        if unknown:
-            raise ValueError(f"body {k}: unknown key(s) {sorted(unknown)}; "
-                             f"expected {sorted(BODY_KEYS)}")
-        name = b.get("name")
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"body {k}: 'name' must be a non-empty string, got {name!r}")
-        if name in names:
-            raise ValueError(f"body {k}: duplicate name {name!r}")
-        if "shape" not in b:
-            raise ValueError(f"body {name!r}: missing 'shape'")
-        st = b.get("static", False)
-        if not isinstance(st, (bool, np.bool_)):
-            raise ValueError(f"body {name!r}: 'static' must be a bool, got {st!r}")
-        bits = []
-        for key, default in (("group", 1), ("mask", MAX_BITS)):
-            v = b.get(key, default)
-            if (isinstance(v, bool) or not isinstance(v, (int, np.integer))
-                    or not 0 <= v <= MAX_BITS):
-                raise ValueError(f"body {name!r}: '{key}' must be an integer in "
-                                 f"[0, 0xFFFFFFFF], got {v!r}")
-            bits.append(int(v))
-        try:
-            build_table([b["shape"]])
-        except ValueError as e:
-            raise ValueError(f"body {name!r}: {e}") from None
-        names.append(name)
-        shapes.append(b["shape"])
-        static.append(bool(st))
-        group.append(bits[0])
-        mask.append(bits[1])
-    return (names, shapes, np.array(static, bool), np.array(group, np.int64),
-            np.array(mask, np.int64))
+class Bounds(NamedTuple):
+    """World AABBs lo, hi float64 (S, 3) m and planes' grown half-spaces plane_w (S, 4)."""
+    lo: np.ndarray
+    hi: np.ndarray
+    plane_w: np.ndarray
+
+
+class NarrowPhase(NamedTuple):
+    """pairs int64 (P, 2); out float64 (P, OUT_SIZE) world rows; status int64 (P,)."""
+    pairs: np.ndarray
+    out: np.ndarray
+    status: np.ndarray
+
+
+class Classified(NamedTuple):
+    """The narrow phase's pairs sorted out: rows into NarrowPhase and sorted pair keys
+    (a * KEY_BASE + b) with the status and method codes, int64 each.
+    touching_*: touching or held by the margin (T,); undecided_*: failed or not run
+    (U,); proximity_rows: within the proximity distance, not touching (Q,)."""
+    touching_rows: np.ndarray
+    touching_keys: np.ndarray
+    touching_status: np.ndarray
+    touching_method: np.ndarray
+    undecided_keys: np.ndarray
+    undecided_status: np.ndarray
+    undecided_method: np.ndarray
+    proximity_rows: np.ndarray
+
+
+class Manifolds(NamedTuple):
+    """Per touching pair: points float64 (>= T, MAX_MANIFOLD, 7), normal (>= T, 3),
+    count int64 (>= T,) (kernels.manifold.manifold_batch)."""
+    points: np.ndarray
+    normal: np.ndarray
+    count: np.ndarray
 
 
 class Pipeline:
-    """Bodies -> contacts, step by step.  See the module docstring for the phases.
+    """A scene -> contacts, step by step.  See the module docstring for the phases.
 
-    bodies: list of dicts {"name": str, "shape": shape dict (shapes.py),
-        "static": bool = False, "group": int = 1, "mask": int = 0xFFFFFFFF}.
-    config: PipelineConfig.  Invalid bodies or settings raise ValueError.
+    scene: a Scene, or a list of body dicts (scene.py) to build one from.
+    config: PipelineConfig.  allowed_pairs: [[name, name], ...] when ``scene`` is a
+    list.  Invalid bodies or settings raise ValueError.
     """
 
-    def __init__(self, bodies, config=None):
-        self.config = PipelineConfig() if config is None else config
-        if not isinstance(self.config, PipelineConfig):
-            raise ValueError(f"config must be a PipelineConfig, got {type(self.config).__name__}")
-        self.config.validate()
-        self.names, shapes, self.static, self.group, self.mask = _validate_bodies(bodies)
-        self.table = build_table(shapes)
-        self.n = len(self.names)
-        index = {nm: i for i, nm in enumerate(self.names)}
-        acm = []
-        for pa, pb in self.config.allowed_pairs:
-            for nm in (pa, pb):
-                if nm not in index:
-                    raise ValueError(f"pipeline config: allowed_pairs names unknown body {nm!r}")
-            i, j = sorted((index[pa], index[pb]))
-            acm.append(i * self.n + j)
-        self._acm = np.unique(np.array(acm, np.int64))
-        self._is_plane = self.table.codes == PLANE
-        self._method = METHOD_NAMES.index(self.config.method)
+    def __init__(self, scene, config=None, allowed_pairs=()):
+        config = PipelineConfig() if config is None else config
+        if not isinstance(config, PipelineConfig):
+            raise ValueError(f"config must be a PipelineConfig, got {type(config).__name__}")
+        config.validate()
+        if isinstance(scene, Scene):
+            if allowed_pairs:
+                raise ValueError("allowed_pairs belong to the scene: use "
+                                 "scene.set_allowed_pairs")
+            self.scene = scene
+        else:
+            if not isinstance(scene, (list, tuple)) or not scene:
+                raise ValueError("bodies must be a non-empty list of dicts")
+            self.scene = Scene(scene, allowed_pairs)
+        self.config = config
+        self._method = METHOD_NAMES.index(config.method)
         self._order = np.empty(0, np.int64)
-        self._axis = -1
         self._buffers = {}
         # batches this long or longer use the threaded kernels (read at each step)
         self.parallel_min_items = PARALLEL_MIN_ITEMS
         self.parallel_min_cheap_items = PARALLEL_MIN_CHEAP_ITEMS
-        self.arbiters = ArbiterSet(self.config.merge_distance, self.config.drift_threshold,
-                                   self.config.max_contacts, self.config.stale_steps,
-                                   n_bodies=self.n)
+        self.arbiters = ArbiterSet(config.merge_distance, config.drift_threshold,
+                                   config.max_contacts, config.stale_steps)
+
+    @property
+    def names(self):
+        """Slot -> body name (None for a free slot)."""
+        return self.scene.names
+
+    def configure(self, **changes):
+        """Change settings (PipelineConfig's names) before the next step, all or none:
+        a bad value raises ValueError with the reason and changes nothing.  Arbiters and
+        contact ids survive."""
+        new = self.config.replace(**changes)
+        self.config = new
+        self._method = METHOD_NAMES.index(new.method)
+        a = self.arbiters
+        a.merge_distance, a.drift_threshold = new.merge_distance, new.drift_threshold
+        a.max_contacts, a.stale_steps = new.max_contacts, new.stale_steps
+        return new
 
     # ------------------------------------------------------------------------------
-    def _check_poses(self, positions, orientations):
-        try:
-            pos = np.ascontiguousarray(positions, dtype=np.float64)
-            quat = np.ascontiguousarray(orientations, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError("positions and orientations must be numeric arrays") from None
-        if pos.shape != (self.n, 3) or quat.shape != (self.n, 4):
-            raise ValueError(f"expected positions ({self.n}, 3) and orientations "
-                             f"({self.n}, 4) quat_xyzw, got {pos.shape} and {quat.shape}")
-        unit = np.empty((self.n, 4))
-        i, why = normalise_poses(pos, quat, unit)
-        if i >= 0:
-            why = ("non-finite position", "non-finite quaternion", "zero quaternion")[why - 1]
-            raise ValueError(f"body {i} ({self.names[i]!r}): {why}")
-        return pos, unit
-
     def _buffer(self, name, shape, dtype=np.float64):
         """A scratch array reused from step to step (grown by 1.5x when too short);
         only for data that does not leave the step."""
@@ -277,54 +310,117 @@ class Pipeline:
             self._buffers[name] = buf
         return buf
 
-    def step(self, positions, orientations, stamp=0.0):
+    def _set_all_poses(self, positions, orientations, stamp):
+        """Every slot's pose at once; ValueError naming the body on bad values."""
+        sc = self.scene
+        n = sc.n_slots
+        try:
+            pos = np.ascontiguousarray(positions, dtype=np.float64)
+            quat = np.ascontiguousarray(orientations, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError("positions and orientations must be numeric arrays") from None
+        if pos.shape != (n, 3) or quat.shape != (n, 4):
+            raise ValueError(f"expected positions ({n}, 3) and orientations "
+                             f"({n}, 4) quat_xyzw, got {pos.shape} and {quat.shape}")
+        unit = np.empty((n, 4))
+        i, why = normalise_poses(pos, quat, unit)
+        if i >= 0:
+            why = ("non-finite position", "non-finite quaternion", "zero quaternion")[why - 1]
+            raise ValueError(f"body {i} ({sc.names[i]!r}): {why}")
+        used = sc.used
+        sc.set_poses_at(np.flatnonzero(used), pos[used], unit[used], stamp)
+
+    def step(self, positions=None, orientations=None, stamp=0.0):
         """Run one step.
 
-        positions float64 (N, 3) world (m); orientations float64 (N, 4) quat_xyzw (any
-        non-zero norm, normalised here); stamp: time (s), passed through.
-        Raises ValueError naming the body on non-finite values or zero quaternions.
-        Returns a StepResult.
+        positions float64 (S, 3) world (m), orientations float64 (S, 4) quat_xyzw (any
+        non-zero norm), one row per slot (rows of free slots are ignored): set every
+        body's pose first, raising ValueError naming the body on non-finite values or
+        zero quaternions.  Without them the step uses the scene's poses.
+        stamp: time (s), passed through.  Returns a StepResult.
         """
-        t = self.table
-        timings = {}
-        pos, quat = self._check_poses(positions, orientations)
         try:
             stamp = float(stamp)
         except (TypeError, ValueError):
             raise ValueError(f"stamp must be a number, got {stamp!r}") from None
-        par = self.parallel_min_items
-        cheap = self.parallel_min_cheap_items
+        if positions is not None or orientations is not None:
+            self._set_all_poses(positions, orientations, stamp)
+        timings = {}
+        clock = [time.perf_counter()]
 
-        t0 = time.perf_counter()
-        lo = self._buffer("lo", (self.n, 3))
-        hi = self._buffer("hi", (self.n, 3))
-        plane_w = self._buffer("plane_w", (self.n, 4))
-        with _threads(self.n, cheap):
-            world_aabbs(t.codes, t.params, t.vrange, t.verts, pos, quat,
-                        0.5 * self.config.proximity, lo, hi, plane_w)
-        t1 = time.perf_counter()
-        timings["bounds"] = t1 - t0
+        def lap(phase):
+            clock.append(time.perf_counter())
+            timings[phase] = clock[-1] - clock[-2]
 
-        with _threads(self.n, cheap):
-            cand, self._order, self._axis = find_pairs(lo, hi, self._is_plane, plane_w,
-                                                       self._order, int(self._axis))
-        t2 = time.perf_counter()
-        timings["broadphase"] = t2 - t1
+        edit_events = self.arbiters.end_bodies(self.scene.take_ended())
+        view = self.scene.view()
+        lap("edits")
+        bounds = self._bounds(view)
+        lap("bounds")
+        candidates = self._broad_phase(view, bounds)
+        lap("broadphase")
+        pairs = filter_pairs(candidates, view.static, view.group, view.mask, view.allowed,
+                             KEY_BASE)
+        lap("filter")
+        narrow = self._narrow_phase(view, pairs)
+        lap("narrowphase")
+        classified = self._classify(narrow)
+        lap("classify")
+        manifolds = self._manifolds(view, narrow, classified)
+        lap("manifold")
+        events = self._arbiters(view, classified, manifolds)
+        lap("arbiters")
+        if len(edit_events):
+            events = Events.concat(edit_events, events)
+        return self._result(stamp, narrow, classified, events, timings, len(candidates))
 
-        pairs = filter_pairs(cand, self.static, self.group, self.mask, self._acm, self.n)
-        t3 = time.perf_counter()
-        timings["filter"] = t3 - t2
+    # -- the phases ---------------------------------------------------------------
+    def _reach(self):
+        """m: the distance up to which pairs are found and measured exactly."""
+        return max(self.config.contact_margin, self.config.proximity)
 
+    def _bounds(self, view):
+        t = view.table
+        n = len(t.codes)
+        lo = self._buffer("lo", (n, 3))[:n]
+        hi = self._buffer("hi", (n, 3))[:n]
+        plane_w = self._buffer("plane_w", (n, 4))[:n]
+        with _threads(n, self.parallel_min_cheap_items):
+            world_aabbs(t.codes, t.params, t.vrange, t.verts, view.positions,
+                        view.orientations, 0.5 * self._reach(), lo, hi, plane_w)
+        return Bounds(lo, hi, plane_w)
+
+    def _broad_phase(self, view, bounds):
+        """Candidate pairs int64 (P, 2) of slots, sorted, among the bodies with a pose."""
+        lo, hi, plane_w = bounds
+        is_plane = self.scene.is_plane
+        active = view.active
+        if active is not None:
+            lo, hi, plane_w, is_plane = lo[active], hi[active], plane_w[active], is_plane[active]
+        if len(lo) < 2:
+            return np.zeros((0, 2), np.int64)
+        with _threads(len(lo), self.parallel_min_cheap_items):
+            cand, self._order, _ = find_pairs(lo, hi, is_plane, plane_w, self._order, -1)
+        if active is not None:
+            cand = active[cand]      # increasing, so the rows stay sorted
+        return cand
+
+    def _narrow_phase(self, view, pairs):
+        t = view.table
+        pos, quat = view.positions, view.orientations
         npairs = len(pairs)
         out = self._buffer("out", (npairs, OUT_SIZE))[:npairs]
         status = self._buffer("status", (npairs,), np.int64)[:npairs]
+        reach = self._reach()
+        par = self.parallel_min_items
         if self._method == M_AUTO:
-            # pairs with a plane use the closed form (auto) whatever the method
             with _threads(npairs, par):
                 collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat,
-                              M_AUTO, _CONTACTS_ONLY, out, status)
+                              M_AUTO, reach, out, status)
         else:
-            has_plane = self._is_plane[pairs[:, 0]] | self._is_plane[pairs[:, 1]]
+            # pairs with a plane use the closed form (auto) whatever the method
+            is_plane = self.scene.is_plane
+            has_plane = is_plane[pairs[:, 0]] | is_plane[pairs[:, 1]]
             for sel, method in ((has_plane, M_AUTO), (~has_plane, self._method)):
                 idx = np.flatnonzero(sel)
                 if len(idx):
@@ -333,42 +429,68 @@ class Pipeline:
                     with _threads(len(idx), par):
                         collide_batch(t.codes, t.params, t.vrange, t.verts,
                                       np.ascontiguousarray(pairs[idx]), pos, quat, method,
-                                      _CONTACTS_ONLY, o, s)
+                                      reach, o, s)
                     out[idx] = o
                     status[idx] = s
-        t4 = time.perf_counter()
-        timings["narrowphase"] = t4 - t3
+        return NarrowPhase(pairs, out, status)
 
-        # touching pairs -> manifolds; failed / not-run pairs keep their arbiters a while
-        rows = [self._buffer(f"split{k}", (npairs,), np.int64) for k in range(8)]
-        nt, nu = split_pairs(pairs, out, status, self.n, ST_FAILED, *rows)
-        cpts = self._buffer("cpts", (nt, MAX_MANIFOLD, 7))
-        cnormal = self._buffer("cnormal", (nt, 3))
-        ccount = self._buffer("ccount", (nt,), np.int64)
+    def _classify(self, narrow):
+        pairs, out, status = narrow
+        npairs = len(pairs)
+        dist = out[:, OUT_DIST]
+        margin = self.config.contact_margin
+        if margin > 0.0 and len(self.arbiters):
+            # hysteresis: a pair with an arbiter keeps touching within the margin
+            near = np.flatnonzero((status == ST_SEPARATED) & (dist <= margin))
+            if len(near):
+                keys = pairs[near, 0] * KEY_BASE + pairs[near, 1]
+                held = near[np.isin(keys, self.arbiters.keys, assume_unique=True)]
+                status[held] = ST_TOUCHING
+        rows = [self._buffer(f"split{k}", (npairs,), np.int64)[:npairs] for k in range(8)]
+        nt, nu = split_pairs(pairs, out, status, KEY_BASE, ST_FAILED, *rows)
+        proximity_rows = np.zeros(0, np.int64)
+        if self.config.proximity > 0.0:
+            proximity_rows = np.flatnonzero((status == ST_SEPARATED)
+                                            & (dist <= self.config.proximity))
+        return Classified(rows[0][:nt], rows[1][:nt], rows[2][:nt], rows[3][:nt],
+                          rows[5][:nu], rows[6][:nu], rows[7][:nu], proximity_rows)
+
+    def _manifolds(self, view, narrow, classified):
+        t = view.table
+        nt = len(classified.touching_rows)
+        points = self._buffer("cpts", (nt, MAX_MANIFOLD, 7))
+        normal = self._buffer("cnormal", (nt, 3))
+        count = self._buffer("ccount", (nt,), np.int64)
         if nt:
-            with _threads(nt, cheap):
-                manifold_batch(t.codes, t.params, t.vrange, t.verts, pairs, rows[0][:nt],
-                               pos, quat, out, self.config.drift_threshold, cpts, cnormal,
-                               ccount)
-        t5 = time.perf_counter()
-        timings["manifold"] = t5 - t4
+            with _threads(nt, self.parallel_min_cheap_items):
+                manifold_batch(t.codes, t.params, t.vrange, t.verts, narrow.pairs,
+                               classified.touching_rows, view.positions, view.orientations,
+                               narrow.out, self.config.drift_threshold, points, normal, count)
+        return Manifolds(points, normal, count)
 
-        events = self.arbiters.update_arrays(
-            pos, quat, rows[1][:nt], cpts, cnormal, ccount, rows[5][:nu],
-            rows[2][:nt], rows[3][:nt], rows[6][:nu], rows[7][:nu])
+    def _arbiters(self, view, c, manifolds):
+        return self.arbiters.update_arrays(
+            view.positions, view.orientations, c.touching_keys, manifolds.points,
+            manifolds.normal, manifolds.count, c.undecided_keys, c.touching_status,
+            c.touching_method, c.undecided_status, c.undecided_method)
+
+    def _result(self, stamp, narrow, classified, events, timings, n_candidates):
         con = self.arbiters.contacts()
-        t6 = time.perf_counter()
-        timings["arbiters"] = t6 - t5
-
+        rows = classified.proximity_rows
+        o = narrow.out[rows]
+        proximity = ProximitySet(
+            body_a=narrow.pairs[rows, 0], body_b=narrow.pairs[rows, 1],
+            distance=o[:, OUT_DIST], point_a=o[:, OUT_PA:OUT_PA + 3],
+            point_b=o[:, OUT_PB:OUT_PB + 3], normal=o[:, OUT_NORMAL:OUT_NORMAL + 3])
         return StepResult(
-            names=self.names, stamp=stamp,
-            pairs=self.arbiters.pairs(),
+            names=self.scene.names, stamp=stamp, pairs=self.arbiters.pairs(),
             body_a=con["body_a"], body_b=con["body_b"],
             position=0.5 * (con["point_a"] + con["point_b"]),
             point_a=con["point_a"], point_b=con["point_b"], normal=con["normal"],
             depth=con["depth"], contact_id=con["contact_id"], age=con["age"],
-            method=con["method"], status=con["status"], events=events, timings=timings,
-            n_candidate_pairs=int(len(cand)), n_narrowphase_pairs=int(npairs))
+            method=con["method"], status=con["status"], proximity=proximity,
+            events=events, timings=timings, n_candidate_pairs=int(n_candidates),
+            n_narrowphase_pairs=int(len(narrow.pairs)))
 
     def warm_up(self):
         """Compile (or load from the on-disk cache) every kernel on a tiny scene, so the

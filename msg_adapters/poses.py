@@ -11,7 +11,7 @@ def body_pose_array_to_arrays(msg):
 
     The float arrays are read-only zero-copy views of the message.  Raises ValueError
     when the field lengths do not match the stride contract (3 and 4 values per name);
-    element values are not checked here (see ``mkcollision_ros.world``).
+    element values are not checked here (see ``mkcollision_ros.scene.Scene.set_poses``).
     """
     names = list(msg.names)
     n = len(names)

@@ -36,6 +36,22 @@ def quat_matrix(q):
     ])
 
 
+def quat_axis(axis, angle):
+    """The xyzw quaternion of a turn by ``angle`` (rad) about ``axis``."""
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
+
+
+def quat_mul(a, b):
+    """The product a * b of two xyzw quaternions (b applied first)."""
+    x1, y1, z1, w1 = a
+    x2, y2, z2, w2 = b
+    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
+
+
 def random_shape(rng, kind, size=1.0, ratio=4.0):
     """A random shape dict of the given type; dimensions in [size/ratio, size]."""
     def dim(k=None):

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from mkcollision_ros.config import bodies_from_flat, bodies_from_params, load_params_file
-from mkcollision_ros.world import PoseStore
 
 CONFIG = os.path.join(os.path.dirname(__file__), "..", "config", "collision_node.yaml")
 
@@ -62,16 +61,3 @@ def test_params_file_errors(tmp_path):
     p.write_text("/**:\n  ros__parameters: {rate_hz: 5.0}\n"
                  "collision_node:\n  ros__parameters: {rate_hz: 7.0}\n")
     assert load_params_file(str(p))["rate_hz"] == 7.0
-
-
-def test_pose_store_drops_bad_entries_only():
-    store = PoseStore(["a", "b", "c"])
-    applied, problems = store.update_named(
-        ["a", "b", "zzz", "c"],
-        [[1, 2, 3], [np.inf, 0, 0], [0, 0, 0], [4, 5, 6]],
-        [[0, 0, 0, 2], [0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 0]])
-    assert applied == 1
-    assert sorted(problems) == ["b: non-finite value", "c: zero quaternion", "zzz: unknown body"]
-    np.testing.assert_allclose(store.orientations[0], [0, 0, 0, 1])
-    assert store.known.tolist() == [True, False, False]
-    assert np.isfinite(store.positions).all()

@@ -164,7 +164,7 @@ def test_bad_input_is_dropped_and_the_rest_applied(ros):
     msg = publish_and_wait(h, pub, got, names, pos, quat, 500)
     c = msg_adapters.contact_array_to_arrays(msg)
     assert len(c["depth"]) == 0          # b and egg have no valid pose yet
-    assert np.isfinite(node.poses.positions).all()
+    assert np.isfinite(node.scene.positions).all()
     # a valid follow-up is applied
     pos = np.array([[0, 0, 0], [0.6, 0, 0], FAR["egg"], FAR["crate"]])
     msg = publish_and_wait(h, pub, got, ["a", "b", "egg", "crate"], pos,
@@ -202,7 +202,7 @@ def test_check_collision_service_does_not_change_the_scene(ros):
     # the scene's own poses are untouched: a and b are still 5 m apart
     res = call(CheckCollision.Request(names=[]))
     assert res.success and len(res.contacts) == 0
-    np.testing.assert_allclose(node.poses.positions[1], [5, 0, 0])
+    np.testing.assert_allclose(node.scene.positions[1], [5, 0, 0])
     # malformed requests get success = false and a reason
     res = call(CheckCollision.Request(names=["a", "ghost"]))
     assert not res.success and "ghost" in res.message

@@ -7,24 +7,11 @@ import pytest
 
 from mkcollision_ros.kernels.constants import ST_PENETRATING, ST_TOUCHING
 from mkcollision_ros.pipeline import Pipeline, PipelineConfig, StepResult
+from oracles import quat_axis, quat_mul
 
 PLANE = {"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
          "static": True}
 ID = [0.0, 0.0, 0.0, 1.0]
-
-
-def quat_axis(axis, angle):
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    return np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
-
-
-def quat_mul(a, b):
-    x1, y1, z1, w1 = a
-    x2, y2, z2, w2 = b
-    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
 
 
 def rotm(q):
@@ -54,16 +41,18 @@ def test_bad_bodies_raise(bodies, match):
 
 def test_bad_config_raises():
     bodies = [{"name": "a", "shape": {"type": "sphere", "radius": 1}}]
-    with pytest.raises(ValueError, match="unknown key"):
+    with pytest.raises(ValueError, match="unknown setting"):
         PipelineConfig.from_dict({"methd": "auto"})
     for kw, match in [({"method": "sat"}, "method"), ({"proximity": -1.0}, "proximity"),
                       ({"merge_distance": 0.0}, "merge_distance"),
                       ({"drift_threshold": float("nan")}, "drift_threshold"),
                       ({"max_contacts": 0}, "max_contacts"), ({"stale_steps": 1.5}, "stale"),
-                      ({"allowed_pairs": [["a"]]}, "allowed_pairs"),
-                      ({"allowed_pairs": [["a", "zz"]]}, "zz")]:
+                      ({"contact_margin": -1e-3}, "contact_margin")]:
         with pytest.raises(ValueError, match=match):
             Pipeline(bodies, PipelineConfig(**kw))
+    for allowed, match in [([["a"]], "allowed_pairs"), ([["a", "zz"]], "zz")]:
+        with pytest.raises(ValueError, match=match):
+            Pipeline(bodies, allowed_pairs=allowed)
     assert PipelineConfig.from_dict({"method": "mpr"}).method == "mpr"
 
 
@@ -101,7 +90,7 @@ def test_filter_rules():
                        "static": bool(i % 5 == 0), "group": int(rng.integers(1, 8)),
                        "mask": int(rng.integers(0, 8))})
     allowed = [["b1", "b2"], ["b7", "b3"], ["b10", "b11"]]
-    p = Pipeline(bodies, PipelineConfig(allowed_pairs=allowed))
+    p = Pipeline(bodies, allowed_pairs=allowed)
     pos = rng.normal(scale=0.2, size=(n, 3))                 # everything overlaps
     r = p.step(pos, np.tile(ID, (n, 1)), 0.0)
     assert r.n_candidate_pairs == n * (n - 1) // 2
@@ -131,6 +120,12 @@ def test_proximity_makes_candidates_not_contacts():
     assert Pipeline(bodies).step(pos, quat).n_candidate_pairs == 0
     r = Pipeline(bodies, PipelineConfig(proximity=0.1)).step(pos, quat)
     assert r.n_candidate_pairs == 1 and len(r.contact_id) == 0 and len(r.pairs) == 0
+    # ... and a proximity pair with its distance and closest points
+    assert len(r.proximity) == 1 and (r.proximity.body_a[0], r.proximity.body_b[0]) == (0, 1)
+    np.testing.assert_allclose(r.proximity.distance, [0.05], atol=1e-12)
+    np.testing.assert_allclose(r.proximity.point_a, [[0.5, 0, 0]], atol=1e-12)
+    np.testing.assert_allclose(r.proximity.point_b, [[0.55, 0, 0]], atol=1e-12)
+    np.testing.assert_allclose(r.proximity.normal, [[1, 0, 0]], atol=1e-12)
 
 
 # ---------------------------------------------------------------- manifolds
@@ -336,8 +331,9 @@ def test_deterministic_with_one_or_two_threads():
         assert a.n_candidate_pairs == b.n_candidate_pairs
         assert np.all(np.isfinite(a.position)) and np.all(a.depth >= 0)
         assert set(a.status.tolist()) <= {ST_TOUCHING, ST_PENETRATING}
-        assert sorted(a.timings) == sorted(["bounds", "broadphase", "filter", "narrowphase",
-                                            "manifold", "arbiters"])
+        assert sorted(a.timings) == sorted(["edits", "bounds", "broadphase", "filter",
+                                            "narrowphase", "classify", "manifold",
+                                            "arbiters"])
     # one thread for short batches runs the same compiled kernels: identical numbers
     for a, b in zip(one, ser):
         for f in ("pairs", "position", "point_a", "point_b", "normal", "depth", "contact_id"):

@@ -59,6 +59,11 @@ FACE_SIN = 0.05          # sin of the angle (~2.9 deg) within which a cap / side
 FACE_SLACK = 0.05        # convex hull face tolerance, relative to the hull's diameter
 REF_COS = 0.9            # the reference face normal must be within ~26 deg of n
 MANIFOLD_CHUNK = 32      # fewest rows of manifold_batch per block (jit.n_blocks)
+# the reduction to max_contacts (_reduce) treats as equal, and gives to the older
+# contact: depths within DEPTH_TIE x merge_distance (dimensionless), squared distances
+# and areas within REDUCE_TIE of the largest (relative)
+DEPTH_TIE = 1e-3
+REDUCE_TIE = 1e-3
 
 
 @njit_kernel
@@ -634,16 +639,38 @@ def _hull_area(px, py, idx, m):
 
 
 @njit_kernel
-def _reduce(mid, depth, rank, n, m, k, keep):
+def _pick(score, rank, chosen, m, tol):
+    """The unchosen candidate of largest ``score`` (m,), where every score within
+    ``tol`` of the largest counts as equal and the smallest ``rank`` (the oldest
+    contact) wins among them; -1 when all are chosen."""
+    top = -np.inf
+    for c in range(m):
+        if not chosen[c] and score[c] > top:
+            top = score[c]
+    best = -1
+    for c in range(m):
+        if chosen[c] or not score[c] >= top - tol:
+            continue
+        if best < 0 or rank[c] < rank[best]:
+            best = c
+    return best
+
+
+@njit_kernel
+def _reduce(mid, depth, rank, n, m, k, keep, depth_tie):
     """Choose ``k`` of ``m`` contacts (midpoints ``mid`` (m, 3), ``depth`` (m,), tie
     ``rank`` (m,), smaller = older): the deepest, the farthest from it, then greedily
     the one giving the largest hull area in the plane normal to ``n``.  Writes the
-    chosen indices into ``keep[:k]``."""
+    chosen indices into ``keep[:k]``.
+
+    Scores that differ by less than a tie band count as equal and go to the older
+    contact, so a flat rest, whose candidates tie up to the pose noise (a cylinder
+    cap's 8-gon on a face: eight equal depths, pairs of equal areas), keeps the
+    contacts it chose first: depths within ``depth_tie`` (m), squared distances and
+    areas within REDUCE_TIE of the largest (relative)."""
     chosen = np.zeros(m, np.bool_)
-    best = 0
-    for c in range(1, m):
-        if depth[c] > depth[best] or (depth[c] == depth[best] and rank[c] < rank[best]):
-            best = c
+    score = np.empty(m)
+    best = _pick(depth, rank, chosen, m, depth_tie)
     keep[0] = best
     chosen[best] = True
     # basis of the contact plane
@@ -664,8 +691,7 @@ def _reduce(mid, depth, rank, n, m, k, keep):
         py[c] = _dot(mid[c], v)
     sel = np.empty(m, np.int64)
     for t in range(1, k):
-        best = -1
-        best_score = -1.0
+        top = 0.0
         for c in range(m):
             if chosen[c]:
                 continue
@@ -674,14 +700,11 @@ def _reduce(mid, depth, rank, n, m, k, keep):
             sel[t] = c
             if t == 1:
                 dx = mid[c] - mid[keep[0]]
-                score = _dot(dx, dx)
+                score[c] = _dot(dx, dx)
             else:
-                score = _hull_area(px, py, sel, t + 1)
-            tol = 1e-12 * max(1.0, abs(best_score))
-            if best < 0 or score > best_score + tol or (
-                    abs(score - best_score) <= tol and rank[c] < rank[best]):
-                best = c
-                best_score = score
+                score[c] = _hull_area(px, py, sel, t + 1)
+            top = max(top, score[c])
+        best = _pick(score, rank, chosen, m, REDUCE_TIE * top)
         keep[t] = best
         chosen[best] = True
 
@@ -893,7 +916,8 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
             # 4. reduce to max_contacts
             if m > max_contacts:
                 nrm = cnormal[row].copy() if m_new > 0 else nn[0].copy()
-                _reduce(mid, depth, rank, nrm, m, max_contacts, keep)
+                _reduce(mid, depth, rank, nrm, m, max_contacts, keep,
+                        DEPTH_TIE * merge_distance)
                 k = max_contacts
                 for c in range(m):
                     if ids[c] < 0:

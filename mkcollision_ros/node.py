@@ -37,7 +37,7 @@ from .config import bodies_from_params
 from .kernels import constants as C
 from .pipeline import Pipeline, PipelineConfig
 from .query import query_contacts
-from .scene import Scene, pose_problems
+from .scene import POSE_PROBLEMS, Scene, pose_problems
 
 # name, default, description.  The type is the default's type; floats must be written
 # with a decimal point in YAML.  Bounds are checked in ``_read_parameters``.
@@ -215,7 +215,8 @@ class CollisionNode(Node):
         posed = sc.posed.copy()
         if len(request.positions) or len(request.orientations):
             _, gp, gq = msg_adapters.body_pose_array_to_arrays(request)
-            bad = [f"{n}: {why}" for n, why in zip(names, pose_problems(gp, gq)) if why]
+            bad = [f"{n}: {POSE_PROBLEMS[why]}" for n, why in zip(names, pose_problems(gp, gq))
+                   if why]
             if bad:
                 raise ValueError("bad poses: " + "; ".join(bad))
             pos[idx], quat[idx] = gp, gq / np.linalg.norm(gq, axis=1)[:, None]

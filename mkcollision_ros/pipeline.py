@@ -322,13 +322,14 @@ class Pipeline:
         if pos.shape != (n, 3) or quat.shape != (n, 4):
             raise ValueError(f"expected positions ({n}, 3) and orientations "
                              f"({n}, 4) quat_xyzw, got {pos.shape} and {quat.shape}")
-        unit = np.empty((n, 4))
+        slots = np.flatnonzero(sc.used)
+        pos, quat = np.ascontiguousarray(pos[slots]), np.ascontiguousarray(quat[slots])
+        unit = np.empty_like(quat)
         i, why = normalise_poses(pos, quat, unit)
         if i >= 0:
             why = ("non-finite position", "non-finite quaternion", "zero quaternion")[why - 1]
-            raise ValueError(f"body {i} ({sc.names[i]!r}): {why}")
-        used = sc.used
-        sc.set_poses_at(np.flatnonzero(used), pos[used], unit[used], stamp)
+            raise ValueError(f"body {slots[i]} ({sc.names[slots[i]]!r}): {why}")
+        sc._write_poses(slots, pos, unit, stamp)
 
     def step(self, positions=None, orientations=None, stamp=0.0):
         """Run one step.

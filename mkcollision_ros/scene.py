@@ -363,19 +363,24 @@ class Scene:
         in_use = (slots >= 0) & (slots < len(self.names))
         in_use[in_use] = self._used[slots[in_use]]
         why = pose_problems(pos, quat)
-        good = in_use & (why == "")
+        good = in_use & (why == 0)
         problems = [f"slot {slots[k]}: no such body" if not in_use[k]
-                    else f"{self.names[slots[k]]}: {why[k]}" for k in np.flatnonzero(~good)]
-        norms = np.linalg.norm(quat[good], axis=1)
-        sel = slots[good]
-        self._pos[sel] = pos[good]
-        self._quat[sel] = quat[good] / norms[:, None]
+                    else f"{self.names[slots[k]]}: {POSE_PROBLEMS[why[k]]}"
+                    for k in np.flatnonzero(~good)]
+        good_quat = quat[good]
+        self._write_poses(slots[good], pos[good],
+                          good_quat / np.linalg.norm(good_quat, axis=1)[:, None], stamp)
+        return int(np.count_nonzero(good)), problems
+
+    def _write_poses(self, slots, positions, unit_quats, stamp):
+        """Set checked poses (finite, unit quaternions) of bodies in use ``slots``."""
+        self._pos[slots] = positions
+        self._quat[slots] = unit_quats
         if stamp is not None:
-            self._stamp[sel] = float(stamp)
-        if not self._posed[sel].all():
-            self._posed[sel] = True
+            self._stamp[slots] = float(stamp)
+        if not self._posed[slots].all():
+            self._posed[slots] = True
             self._n_posed = None
-        return int(len(sel)), problems
 
     # -- reading ------------------------------------------------------------------
     @property
@@ -476,15 +481,18 @@ class Scene:
         return out
 
 
+POSE_PROBLEMS = ("", "non-finite value", "zero quaternion")
+
+
 def pose_problems(positions, orientations):
-    """Why each pose (positions (K, 3), quat_xyzw (K, 4)) is unusable: object array of
-    str, "" for a good pose, else "non-finite value" or "zero quaternion"."""
+    """What is wrong with each pose (positions (K, 3), quat_xyzw (K, 4)): int64 (K,)
+    codes into POSE_PROBLEMS, 0 for a good pose."""
     pos = np.asarray(positions, np.float64).reshape(-1, 3)
     quat = np.asarray(orientations, np.float64).reshape(-1, 4)
     finite = np.isfinite(pos).all(axis=1) & np.isfinite(quat).all(axis=1)
     with np.errstate(invalid="ignore", over="ignore"):
         norms = np.sqrt(np.sum(quat * quat, axis=1))
-    why = np.full(len(pos), "", dtype=object)
-    why[finite & ~(norms > QUAT_MIN_NORM)] = "zero quaternion"
-    why[~finite] = "non-finite value"
-    return why
+    code = np.zeros(len(pos), np.int64)
+    code[finite & ~(norms > QUAT_MIN_NORM)] = 2
+    code[~finite] = 1
+    return code

@@ -173,6 +173,18 @@ def test_a_body_without_a_pose_does_not_collide():
     assert [tuple(x) for x in p.step().pairs] == [(0, 1)]
 
 
+def test_step_with_arrays_ignores_free_slots_rows():
+    p = Pipeline([ball("a"), ball("b"), ball("c")])
+    p.scene.remove_body("b")
+    pos = np.array([[0.0, 0, 0], [np.nan, 0, 0], [0.9, 0, 0]])
+    quat = np.array([ID, [0.0, 0, 0, 0], ID])
+    r = p.step(pos, quat, 1.0)
+    assert [tuple(x) for x in r.pairs] == [(0, 2)]
+    assert np.isnan(p.scene.stamps[1]) and p.scene.stamps[2] == 1.0
+    with pytest.raises(ValueError, match=r"body 2 \('c'\): zero quaternion"):
+        p.step(pos, np.array([ID, ID, [0.0, 0, 0, 0]]), 2.0)
+
+
 def test_settings_change_between_steps_or_are_refused():
     p = Pipeline(Scene(_touching_row()))
     ids = p.step().contact_id.copy()

@@ -322,13 +322,15 @@ class Pipeline:
         if pos.shape != (n, 3) or quat.shape != (n, 4):
             raise ValueError(f"expected positions ({n}, 3) and orientations "
                              f"({n}, 4) quat_xyzw, got {pos.shape} and {quat.shape}")
-        slots = np.flatnonzero(sc.used)
-        pos, quat = np.ascontiguousarray(pos[slots]), np.ascontiguousarray(quat[slots])
-        unit = np.empty_like(quat)
+        slots = None if len(sc) == n else np.flatnonzero(sc.used)
+        if slots is not None:
+            pos, quat = np.ascontiguousarray(pos[slots]), np.ascontiguousarray(quat[slots])
+        unit = self._buffer("unit", quat.shape)[:len(quat)]
         i, why = normalise_poses(pos, quat, unit)
         if i >= 0:
+            slot = i if slots is None else slots[i]
             why = ("non-finite position", "non-finite quaternion", "zero quaternion")[why - 1]
-            raise ValueError(f"body {slots[i]} ({sc.names[slots[i]]!r}): {why}")
+            raise ValueError(f"body {slot} ({sc.names[slot]!r}): {why}")
         sc._write_poses(slots, pos, unit, stamp)
 
     def step(self, positions=None, orientations=None, stamp=0.0):
@@ -445,8 +447,9 @@ class Pipeline:
             near = np.flatnonzero((status == ST_SEPARATED) & (dist <= margin))
             if len(near):
                 keys = pairs[near, 0] * KEY_BASE + pairs[near, 1]
-                held = near[np.isin(keys, self.arbiters.keys, assume_unique=True)]
-                status[held] = ST_TOUCHING
+                arb = self.arbiters.keys
+                at = np.minimum(np.searchsorted(arb, keys), len(arb) - 1)
+                status[near[arb[at] == keys]] = ST_TOUCHING
         rows = [self._buffer(f"split{k}", (npairs,), np.int64)[:npairs] for k in range(8)]
         nt, nu = split_pairs(pairs, out, status, KEY_BASE, ST_FAILED, *rows)
         proximity_rows = np.zeros(0, np.int64)

@@ -373,7 +373,10 @@ class Scene:
         return int(np.count_nonzero(good)), problems
 
     def _write_poses(self, slots, positions, unit_quats, stamp):
-        """Set checked poses (finite, unit quaternions) of bodies in use ``slots``."""
+        """Set checked poses (finite, unit quaternions) of bodies in use ``slots``
+        (None: every slot, all in use)."""
+        if slots is None:
+            slots = slice(0, len(self.names))
         self._pos[slots] = positions
         self._quat[slots] = unit_quats
         if stamp is not None:

@@ -283,6 +283,10 @@ class ArbiterSet:
         self._con = {k: v[c_keep] for k, v in self._con.items()}
         return ended
 
+    def end_all(self):
+        """End every arbiter (a time reset): the Events, as ``end_bodies``."""
+        return self.end_bodies(np.unique(self._pairs))
+
     def contacts(self, pos_w=None, quat_w=None):
         """Every stored contact in the world, ordered by pair then id: dict of arrays
         body_a, body_b, contact_id, age (int64 (C,)), point_a, point_b, normal

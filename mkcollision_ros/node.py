@@ -1,184 +1,467 @@
-"""The collision node: ROS wiring around ``mkcollision_ros.pipeline.Pipeline``.
+"""The collision node: ROS wiring around ``mkcollision_ros.scene.Scene`` and
+``mkcollision_ros.pipeline.Pipeline``.
 
 Topics (names are parameters, relative to the node's namespace):
   in   ``body_poses``       mkcollision_msgs/BodyPoseArray   poses by body name
   in   ``pose_array``       geometry_msgs/PoseArray          poses in configured body order
   out  ``contacts``         mkcollision_msgs/ContactArray    every step's contacts
   out  ``contact_markers``  visualization_msgs/MarkerArray   points + normal arrows
+  out  ``/diagnostics``     diagnostic_msgs/DiagnosticArray  health, once a period
 Services:
   ``check_collision``       mkcollision_msgs/srv/CheckCollision  stateless query
 
-The node owns one ``scene.Scene`` (bodies, filters, stamped poses); pose messages
-write into it.  One timer at ``rate_hz`` steps the pipeline on the newest poses once any
-pose has arrived; the ContactArray carries the stamp of the newest pose message.  A
-body that has not received a pose yet (and is not static or given an initial pose)
-does not collide.
+Pose inputs are best effort, keep last 1 (the sensor-data idea: a best-effort or a
+reliable publisher connects, and a burst leaves only the newest message);
+``reliable_inputs`` makes them reliable.  Outputs are reliable, keep last 10.
 
-Bad input never stops the node: malformed messages are dropped, bad entries inside a
-message (unknown names, NaN, zero quaternions) are dropped one by one, each with a
-throttled warning; the rest is applied.  A broken configuration is reported in one
-clear line and the process exits with status 1 before spinning.
+The node owns one scene (bodies, filters, stamped poses); pose messages write into it.
+``trigger`` ``on_message`` steps once per accepted pose message, ``timer`` steps at
+``rate_hz`` when new poses arrived since the last step (a stamp is never published
+twice).  Each ContactArray carries the newest accepted pose stamp.  A body that has not
+received a pose yet (and is not static or given an initial pose) does not collide; a
+body whose pose is older than ``max_pose_age_s`` is stale (diagnostics; with
+``stale_policy`` drop it stops colliding until a new pose arrives).
+
+Parameters come from one table (PARAMETERS): each is declared with its description,
+range and read-only flag (``ros2 param describe``).  The live ones change with ``ros2
+param set``: the value is checked before it is taken (a bad one is refused with the
+reason and changes nothing) and applies from the next step; ``bodies.<name>.<key>``
+changes that body's shape or filter.  A params file key the node does not know stops
+the start with that key named.
+
+Bad input never stops the node.  Messages in another frame, with a zero, far-future,
+repeated or out-of-order stamp, or with lengths that do not match, are dropped; bad
+entries inside a message (unknown or duplicate names, NaN, Inf, coordinates beyond
+``max_abs_coordinate``, zero or non-unit quaternions) are dropped one by one and the
+rest applied.  Each reason has its own throttled warning (an unknown name is warned
+once) and its own count in diagnostics.  A stamp more than ``time_reset_s`` behind the
+newest is a time reset (a bag loops, a simulator restarts): every contact ends, an INFO
+is logged and the new time is taken.  A broken configuration is reported in one clear
+line and the process exits with status 1 before spinning.
 """
+import collections
+import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseArray
 from mkcollision_msgs.msg import BodyPoseArray, ContactArray
 from mkcollision_msgs.srv import CheckCollision
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                SetParametersResult)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.parameter import Parameter
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from visualization_msgs.msg import MarkerArray
 
 import msg_adapters
 
 from .config import bodies_from_params
 from .kernels import constants as C
-from .pipeline import Pipeline, PipelineConfig
+from .pipeline import PIPELINE_METHODS, Pipeline, PipelineConfig
 from .query import query_contacts
+from .results import ContactSet
 from .scene import POSE_PROBLEMS, Scene, pose_problems
 
-# name, default, description.  The type is the default's type; floats must be written
-# with a decimal point in YAML.  Bounds are checked in ``_read_parameters``.
+PIPELINE_SETTINGS = ("method", "contact_margin", "proximity", "merge_distance",
+                     "drift_threshold", "max_contacts", "stale_steps")
+
+
+@dataclass(frozen=True)
+class Param:
+    """One node parameter: the default fixes its type; ``lo``/``hi`` its range
+    (inclusive), ``choices`` its strings; ``read_only`` ones are fixed at start."""
+    name: str
+    default: object
+    description: str
+    lo: object = None
+    hi: object = None
+    choices: tuple = ()
+    read_only: bool = False
+
+    def descriptor(self):
+        text = self.description
+        if self.choices:
+            text += f" (one of: {', '.join(self.choices)})"
+        d = ParameterDescriptor(description=text, read_only=self.read_only)
+        if self.lo is not None and isinstance(self.default, float):
+            d.floating_point_range = [FloatingPointRange(from_value=float(self.lo),
+                                                         to_value=float(self.hi), step=0.0)]
+        elif self.lo is not None and isinstance(self.default, int):
+            d.integer_range = [IntegerRange(from_value=int(self.lo), to_value=int(self.hi),
+                                            step=1)]
+        return d
+
+    def check(self, value):
+        """The reason ``value`` is refused, or None."""
+        want = type(self.default)
+        if type(value) is not want:
+            return f"'{self.name}' must be a {want.__name__}, got {value!r}"
+        if self.choices and value not in self.choices:
+            return f"'{self.name}' must be one of {list(self.choices)}, got {value!r}"
+        if self.lo is not None and not (self.lo <= value <= self.hi):
+            return f"'{self.name}' must be in [{self.lo}, {self.hi}], got {value!r}"
+        return None
+
+
 PARAMETERS = (
-    ("frame_id", "world", "frame of the poses and of every published point"),
-    ("rate_hz", 30.0, "collision steps per second (> 0)"),
-    ("method", "auto", "narrow-phase method: auto | gjk_epa | mpr"),
-    ("contact_margin", 0.001, "m (>= 0); a touching pair keeps touching within this gap"),
-    ("proximity", 0.0, "m (>= 0); pairs this close are measured (library: StepResult.proximity)"),
-    ("merge_distance", 0.02, "m (> 0); a new contact this close to a stored one updates it"),
-    ("drift_threshold", 0.01, "m (> 0); a stored contact whose points drift this far is dropped"),
-    ("max_contacts", 4, "contacts kept per touching pair (>= 1)"),
-    ("stale_steps", 3, "steps an unconfirmed pair is kept (>= 1)"),
-    ("publish_markers", True, "publish the MarkerArray"),
-    ("marker_normal_length", 0.2, "m; length of the normal arrows"),
-    ("max_marker_arrows", 500, "cap on normal arrows per MarkerArray"),
-    ("warn_throttle_s", 2.0, "s; minimum interval between repeated input warnings"),
-    ("pose_topic", "body_poses", "BodyPoseArray input topic"),
-    ("pose_array_topic", "pose_array", "geometry_msgs/PoseArray input topic"),
-    ("contacts_topic", "contacts", "ContactArray output topic"),
-    ("markers_topic", "contact_markers", "MarkerArray output topic"),
+    Param("frame_id", "world", "frame of the input poses (messages in another frame are "
+          "dropped) and of every output"),
+    Param("trigger", "on_message", "on_message: one step per accepted pose message (the "
+          "newest; never a queue); timer: steps at rate_hz when new poses arrived",
+          choices=("on_message", "timer"), read_only=True),
+    Param("rate_hz", 30.0, "Hz; steps per second with trigger timer", 0.1, 10000.0),
+    Param("reliable_inputs", False, "pose subscriptions reliable instead of best effort",
+          read_only=True),
+    Param("method", "auto", "narrow-phase method", choices=PIPELINE_METHODS),
+    Param("contact_margin", 0.001, "m; a touching pair keeps touching (and its contact "
+          "ids) while its gap is within this", 0.0, 1.0),
+    Param("proximity", 0.0, "m; pairs this close are measured (library: "
+          "StepResult.proximity)", 0.0, 1000.0),
+    Param("merge_distance", 0.02, "m; a new contact this close to a stored one keeps its "
+          "id", 1e-9, 100.0),
+    Param("drift_threshold", 0.01, "m; a stored contact whose points drift this far apart "
+          "is dropped", 1e-9, 100.0),
+    Param("max_contacts", 4, "contacts kept per touching pair", 1, 16),
+    Param("stale_steps", 3, "steps an unconfirmed pair is kept", 1, 1000),
+    Param("publish_markers", True, "publish the MarkerArray"),
+    Param("marker_normal_length", 0.2, "m; length of the normal arrows", 0.0, 1000.0),
+    Param("max_marker_arrows", 500, "cap on normal arrows per MarkerArray", 0, 1000000),
+    Param("warn_throttle_s", 2.0, "s; least interval between two warnings of one reason",
+          0.0, 3600.0),
+    Param("max_abs_coordinate", 1.0e6, "m; a pose with a coordinate beyond this is dropped",
+          1.0, 1.0e12),
+    Param("quaternion_tolerance", 0.01, "a quaternion whose norm is farther than this from "
+          "1 is dropped, a closer one normalised (tf2's tolerance)", 0.0, 1.0),
+    Param("max_pose_age_s", 1.0, "s; a body whose pose is older than this, against the "
+          "newest pose stamp, is stale", 0.0, 1.0e9),
+    Param("stale_policy", "keep", "keep: a stale body keeps colliding at its last pose; "
+          "drop: it does not collide until a new pose", choices=("keep", "drop")),
+    Param("time_reset_s", 1.0, "s; a stamp this far behind the newest is a time reset "
+          "(contacts end, the new time is taken); one less far behind is dropped as out "
+          "of order", 0.0, 1.0e9),
+    Param("max_future_s", 10.0, "s; a stamp this far ahead of the node's clock is dropped",
+          0.0, 1.0e9),
+    Param("max_bodies", 100000, "a pose message with more entries is dropped", 1, 10000000),
+    Param("diagnostics_period_s", 1.0, "s; period of the /diagnostics status", 0.1, 3600.0,
+          read_only=True),
+    Param("pose_topic", "body_poses", "BodyPoseArray input topic", read_only=True),
+    Param("pose_array_topic", "pose_array", "geometry_msgs/PoseArray input topic",
+          read_only=True),
+    Param("contacts_topic", "contacts", "ContactArray output topic", read_only=True),
+    Param("markers_topic", "contact_markers", "MarkerArray output topic", read_only=True),
 )
+PARAMS = {p.name: p for p in PARAMETERS}
+# parameters every rclpy node may be given, which the node leaves to rclpy
+ROS_PARAMETERS = ("use_sim_time", "start_type_description_service")
 METHODS = {"auto": C.M_AUTO, "gjk_epa": C.M_GJK_EPA, "mpr": C.M_MPR}
+LATENCY_WINDOW = 1000      # steps in the latency percentiles
 
 
 class ConfigError(ValueError):
     """The node's parameters cannot describe a valid scene."""
 
 
+def _seconds(stamp):
+    """builtin_interfaces/Time -> float seconds."""
+    return stamp.sec + 1e-9 * stamp.nanosec
+
+
 class CollisionNode(Node):
     def __init__(self, node_name="collision_node", **node_kwargs):
-        # Body parameters are free-form (their keys depend on the shape), so every
-        # override is declared; the fixed parameters of PARAMETERS get defaults.
-        super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
+        # the parameters are declared here, from the table and from the params file's
+        # bodies.* block (free-form: its keys depend on the shape)
+        super().__init__(node_name, automatically_declare_parameters_from_overrides=False,
                          **node_kwargs)
-        self.cfg = self._read_parameters()
-        bodies = bodies_from_params(
-            {f"bodies.{k}": p.value
-             for k, p in self.get_parameters_by_prefix("bodies").items()})
+        self.cfg = self._declare_parameters()
+        bodies = bodies_from_params(self._body_params())
         self.scene = Scene(bodies)
         self.pipeline = Pipeline(self.scene, config=PipelineConfig(
-            method=self.cfg["method"], contact_margin=self.cfg["contact_margin"],
-            proximity=self.cfg["proximity"], merge_distance=self.cfg["merge_distance"],
-            drift_threshold=self.cfg["drift_threshold"], max_contacts=self.cfg["max_contacts"],
-            stale_steps=self.cfg["stale_steps"]))
-        t0 = time.perf_counter()
-        self.pipeline.warm_up()
-        self.get_logger().info(
-            f"{len(self.scene)} bodies loaded; kernels ready in {time.perf_counter() - t0:.2f} s")
-
-        reliable = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
-        self.sub_named = self.create_subscription(
-            BodyPoseArray, self.cfg["pose_topic"], self._on_body_poses, reliable)
-        self.sub_array = self.create_subscription(
-            PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, reliable)
-        self.pub_contacts = self.create_publisher(ContactArray, self.cfg["contacts_topic"], 10)
-        self.pub_markers = self.create_publisher(MarkerArray, self.cfg["markers_topic"], 10)
-        self.srv_check = self.create_service(CheckCollision, "check_collision",
-                                             self._on_check_collision)
+            **{k: self.cfg[k] for k in PIPELINE_SETTINGS}))
         # PoseArray poses go to the configured bodies in their order
         self.order = np.array([self.scene.index[b["name"]] for b in bodies], np.int64)
-        self.stamp = None
+        t0 = time.perf_counter()
+        self.pipeline.warm_up()
+        self.warm_up_s = time.perf_counter() - t0
+        self.get_logger().info(
+            f"{len(self.scene)} bodies loaded; kernels ready in {self.warm_up_s:.2f} s")
+
+        self.stamp = None            # newest accepted pose stamp (builtin Time)
+        self.newest = -math.inf      # the same, in seconds
+        self.dirty = False           # poses arrived since the last step
         self.steps = 0
-        self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
+        self.dropped = collections.Counter()      # reason -> entries or messages
+        self.failures = 0                          # narrow-phase FAILED pairs, summed
+        self.step_errors = 0
+        self.latency = collections.deque(maxlen=LATENCY_WINDOW)
+        self.n_stale = 0
+        self.oldest_age = 0.0
+        self.last = None                           # the last StepResult
+        self._warned_at = {}
+        self._warned_names = set()
+        self._diag_steps = 0
+        self._diag_t = time.monotonic()
+
+        depth1 = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                            reliability=(ReliabilityPolicy.RELIABLE if self.cfg["reliable_inputs"]
+                                         else ReliabilityPolicy.BEST_EFFORT))
+        self.sub_named = self.create_subscription(
+            BodyPoseArray, self.cfg["pose_topic"], self._on_body_poses, depth1)
+        self.sub_array = self.create_subscription(
+            PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, depth1)
+        self.pub_contacts = self.create_publisher(ContactArray, self.cfg["contacts_topic"], 10)
+        self.pub_markers = self.create_publisher(MarkerArray, self.cfg["markers_topic"], 10)
+        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self.srv_check = self.create_service(CheckCollision, "check_collision",
+                                             self._on_check_collision)
+        self.timer = None
+        if self.cfg["trigger"] == "timer":
+            self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
+        self.diag_timer = self.create_timer(self.cfg["diagnostics_period_s"],
+                                            self._publish_diagnostics)
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
 
     # -- parameters ---------------------------------------------------------------
-    def _read_parameters(self):
+    def _declare_parameters(self):
+        overrides = self._parameter_overrides      # rclpy: name -> Parameter (params file)
+        for name in overrides:
+            if not (name in PARAMS or name.startswith("bodies.") or name in ROS_PARAMETERS
+                    or name.startswith("qos_overrides.")):
+                raise ConfigError(f"unknown parameter '{name}' (a typo?); the node's "
+                                  f"parameters are {sorted(PARAMS)} and bodies.*")
         cfg = {}
-        for name, default, description in PARAMETERS:
-            if not self.has_parameter(name):
-                self.declare_parameter(name, default)
-            value = self.get_parameter(name).value
-            if isinstance(default, float) and isinstance(value, int) \
-                    and not isinstance(value, bool):
-                value = float(value)  # YAML `30` for a float parameter: accept it
-            if type(value) is not type(default):
-                raise ConfigError(f"parameter '{name}' ({description}) must be a "
-                                  f"{type(default).__name__}, got {value!r}")
-            cfg[name] = value
-        checks = (
-            ("rate_hz", cfg["rate_hz"] > 0.0), ("proximity", cfg["proximity"] >= 0.0),
-            ("contact_margin", cfg["contact_margin"] >= 0.0),
-            ("merge_distance", cfg["merge_distance"] > 0.0),
-            ("drift_threshold", cfg["drift_threshold"] > 0.0),
-            ("max_contacts", cfg["max_contacts"] >= 1), ("stale_steps", cfg["stale_steps"] >= 1),
-            ("marker_normal_length", cfg["marker_normal_length"] >= 0.0),
-            ("max_marker_arrows", cfg["max_marker_arrows"] >= 0),
-            ("warn_throttle_s", cfg["warn_throttle_s"] >= 0.0),
-            ("method", cfg["method"] in METHODS),
-        )
-        for name, ok in checks:
-            if not ok:
-                desc = dict((n, d) for n, _, d in PARAMETERS)[name]
-                raise ConfigError(f"parameter '{name}' = {cfg[name]!r} is invalid: {desc}")
-        if not self.get_parameters_by_prefix("bodies"):
-            raise ConfigError("no bodies configured: give a params file with bodies.names "
-                              "and one block per body (see config/collision_node.yaml)")
+        for p in PARAMETERS:
+            given = overrides.get(p.name)
+            if given is not None and isinstance(p.default, float) \
+                    and given.type_ == Parameter.Type.INTEGER:
+                # YAML `30` for a float parameter: take it as 30.0
+                overrides[p.name] = Parameter(p.name, value=float(given.value))
+            given = overrides.get(p.name)
+            if given is not None:
+                why = p.check(given.value)
+                if why:
+                    raise ConfigError(f"parameter {why} ({p.description})")
+            cfg[p.name] = self.declare_parameter(p.name, p.default, p.descriptor()).value
+        for name, given in overrides.items():
+            if name.startswith("bodies.") and not self.has_parameter(name):
+                self.declare_parameter(name, given.value,
+                                       ParameterDescriptor(description="a body's shape key "
+                                                           "(config/collision_node.yaml)"))
+        if not self._body_params():
+            ns = self.get_namespace()
+            raise ConfigError(
+                f"no bodies configured for node '{self.get_name()}' in namespace '{ns}': "
+                f"the params file needs bodies.names and one block per body under "
+                f"'/**:' or '{self.get_fully_qualified_name()}:' (see "
+                f"config/collision_node.yaml)")
         return cfg
 
+    def _body_params(self):
+        return {f"bodies.{k}": p.value
+                for k, p in self.get_parameters_by_prefix("bodies").items()}
+
+    def _check_parameters(self, params):
+        """on-set: refuse the whole set (with the reason) if any value is bad."""
+        changes, bodies = {}, self._body_params()
+        for prm in params:
+            if prm.name in PARAMS:
+                value = prm.value
+                if isinstance(PARAMS[prm.name].default, float) \
+                        and prm.type_ == Parameter.Type.INTEGER:
+                    value = float(value)
+                why = PARAMS[prm.name].check(value)
+                if why:
+                    return SetParametersResult(successful=False, reason=why)
+                changes[prm.name] = value
+            elif prm.name == "bodies.names":
+                if list(prm.value) != list(bodies["bodies.names"]):
+                    return SetParametersResult(successful=False, reason=(
+                        "bodies.names cannot change while running: a body's keys "
+                        "(bodies.<name>.<key>) can"))
+            elif prm.name.startswith("bodies."):
+                bodies[prm.name] = prm.value
+            elif prm.name not in ROS_PARAMETERS:
+                return SetParametersResult(successful=False,
+                                           reason=f"unknown parameter '{prm.name}'")
+        try:
+            self.pipeline.config.replace(**{k: v for k, v in changes.items()
+                                            if k in PIPELINE_SETTINGS})
+            bodies_from_params(bodies)
+        except ValueError as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, params):
+        """post-set: take the checked values (from the next step on)."""
+        settings, touched, names = {}, set(), {p.name for p in params}
+        for prm in params:
+            if prm.name in PARAMS:
+                value = prm.value
+                if isinstance(PARAMS[prm.name].default, float):
+                    value = float(value)
+                self.cfg[prm.name] = value
+                if prm.name in PIPELINE_SETTINGS:
+                    settings[prm.name] = value
+            elif prm.name.startswith("bodies.") and prm.name != "bodies.names":
+                touched.add(prm.name.split(".")[1])
+        if settings:
+            self.pipeline.configure(**settings)
+        if touched:
+            for body in bodies_from_params(self._body_params()):
+                if body["name"] in touched:
+                    old = self.scene.body(body["name"])
+                    body = dict(body)
+                    body.pop("pose", None)          # a shape edit keeps the current pose
+                    if (body["shape"], body["static"], body["group"], body["mask"]) != (
+                            old.shape, old.static, old.group, old.mask):
+                        self.scene.replace_body(body)
+        if "rate_hz" in names and self.timer is not None:
+            self.destroy_timer(self.timer)
+            self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
+
     # -- input --------------------------------------------------------------------
-    def _warn(self, text):
-        self.get_logger().warning(text, throttle_duration_sec=self.cfg["warn_throttle_s"])
+    def _warn(self, reason, text, count=1):
+        """Count ``count`` dropped items under ``reason``; warn at most once per
+        warn_throttle_s per reason."""
+        self.dropped[reason] += count
+        now = time.monotonic()
+        if now - self._warned_at.get(reason, -math.inf) >= self.cfg["warn_throttle_s"]:
+            self._warned_at[reason] = now
+            self.get_logger().warning(text)
 
     def _on_body_poses(self, msg):
         try:
             names, pos, quat = msg_adapters.body_pose_array_to_arrays(msg)
         except ValueError as err:
-            self._warn(f"dropped a BodyPoseArray: {err}")
+            self._warn("length mismatch", f"dropped a BodyPoseArray: {err}")
             return
-        _, problems = self.scene.set_poses(names, pos, quat, _seconds(msg.header.stamp))
-        self._accept(msg.header.stamp, problems, "BodyPoseArray")
+        if not self._message_ok(msg.header, len(names), "BodyPoseArray"):
+            return
+        slots = np.fromiter((self.scene.index.get(n, -1) for n in names), np.int64,
+                            len(names))
+        unknown = [n for n, s in zip(names, slots) if s < 0]
+        if unknown:
+            self.dropped["unknown name"] += len(unknown)
+            new = sorted(set(unknown) - self._warned_names)
+            if new:
+                self._warned_names.update(new)
+                self.get_logger().warning(f"BodyPoseArray names unknown bodies (warned once "
+                                          f"per name): {new[:20]}")
+        ok = slots >= 0
+        self._ingest(msg.header.stamp, slots[ok], pos[ok], quat[ok], "BodyPoseArray")
 
     def _on_pose_array(self, msg):
         n = len(self.order)
         if len(msg.poses) != n:
-            self._warn(f"dropped a PoseArray with {len(msg.poses)} poses: the node has {n} "
-                       f"bodies, and PoseArray poses are matched to bodies by order")
+            self._warn("length mismatch", f"dropped a PoseArray with {len(msg.poses)} poses: "
+                       f"the node has {n} bodies, and PoseArray poses are matched to "
+                       f"bodies by order")
+            return
+        if not self._message_ok(msg.header, n, "PoseArray"):
             return
         pos, quat = msg_adapters.pose_array_to_arrays(msg)
-        _, problems = self.scene.set_poses_at(self.order, pos, quat,
-                                              _seconds(msg.header.stamp))
-        self._accept(msg.header.stamp, problems, "PoseArray")
+        self._ingest(msg.header.stamp, self.order, pos, quat, "PoseArray")
 
-    def _accept(self, stamp, problems, kind):
-        if problems:
-            shown = "; ".join(problems[:5]) + (" ..." if len(problems) > 5 else "")
-            self._warn(f"{kind}: dropped {len(problems)} bad entr"
-                       f"{'y' if len(problems) == 1 else 'ies'}: {shown}")
-        self.stamp = stamp
+    def _message_ok(self, header, n_entries, kind):
+        """The whole-message checks: frame, stamp, size."""
+        frame = self.cfg["frame_id"]
+        if header.frame_id != frame:
+            self._warn("wrong frame_id", f"dropped a {kind} in frame '{header.frame_id}': "
+                       f"the node works in '{frame}' (parameter frame_id)")
+            return False
+        t = _seconds(header.stamp)
+        if t == 0.0:
+            self._warn("zero stamp", f"dropped a {kind} with a zero stamp: stamp poses "
+                       f"with the time they are valid at")
+            return False
+        now = _seconds(self.get_clock().now().to_msg())
+        if t > now + self.cfg["max_future_s"]:
+            self._warn("future stamp", f"dropped a {kind} stamped {t:.3f} s, more than "
+                       f"max_future_s = {self.cfg['max_future_s']} s ahead of the node's "
+                       f"clock ({now:.3f} s)")
+            return False
+        if n_entries > self.cfg["max_bodies"]:
+            self._warn("too many entries", f"dropped a {kind} with {n_entries} entries "
+                       f"(max_bodies = {self.cfg['max_bodies']})")
+            return False
+        if t < self.newest - self.cfg["time_reset_s"]:
+            self.get_logger().info(
+                f"time reset: a {kind} stamped {t:.3f} s is {self.newest - t:.3f} s behind "
+                f"the newest pose; every contact ends and the new time is taken")
+            self.pipeline.end_contacts()
+            self.scene.stamps[:] = np.nan
+            self.newest = -math.inf
+        return True
+
+    def _ingest(self, stamp, slots, pos, quat, kind):
+        t = _seconds(stamp)
+        old = self.scene.stamps[slots] >= t          # NaN (no pose yet) compares False
+        if old.any():
+            self._warn("stale stamp", f"{kind}: dropped {int(old.sum())} pose(s) stamped "
+                       f"{t:.6f} s, not newer than the bodies' last poses (out of order or "
+                       f"repeated)", int(old.sum()))
+            keep = ~old
+            slots, pos, quat = slots[keep], pos[keep], quat[keep]
+        if not len(slots):
+            return
+        applied, problems = self.scene.set_poses_at(
+            slots, pos, quat, t, max_abs=self.cfg["max_abs_coordinate"],
+            quat_tolerance=self.cfg["quaternion_tolerance"])
+        by_reason = collections.defaultdict(list)
+        for text in problems:
+            name, _, reason = text.rpartition(": ")
+            by_reason[reason].append(name)
+        for reason, names in by_reason.items():
+            self._warn(reason, f"{kind}: dropped {len(names)} entr"
+                       f"{'y' if len(names) == 1 else 'ies'} ({reason}): {names[:5]}"
+                       f"{' ...' if len(names) > 5 else ''}", len(names))
+        if not applied:
+            return
+        if t >= self.newest:
+            self.newest, self.stamp = t, stamp
+        self.dirty = True
+        if self.cfg["trigger"] == "on_message":
+            self._step()
 
     # -- the step -----------------------------------------------------------------
     def _on_timer(self):
-        if self.stamp is None:
-            return
+        if self.dirty:
+            self._step()
+
+    def _apply_stale_policy(self):
+        sc = self.scene
+        age = self.newest - sc.stamps
+        stale = sc.used & ~sc.static & (age > self.cfg["max_pose_age_s"])
+        self.n_stale = int(np.count_nonzero(stale))
+        finite = np.isfinite(age) & sc.used
+        self.oldest_age = float(age[finite].max()) if finite.any() else 0.0
+        sc.set_enabled(~stale if self.cfg["stale_policy"] == "drop"
+                       else np.ones(sc.n_slots, bool))
+
+    def _step(self):
+        self.dirty = False
         try:
-            res = self.pipeline.step(stamp=_seconds(self.stamp))
+            self._apply_stale_policy()
+            res = self.pipeline.step(stamp=self.newest)
         except Exception as err:  # noqa: BLE001 - the node must keep running
-            self.get_logger().error(f"collision step failed, skipped: {err!r}",
-                                    throttle_duration_sec=self.cfg["warn_throttle_s"])
+            self.step_errors += 1
+            self._warn("step error", f"collision step failed, skipped: {err!r}")
             return
         self.steps += 1
+        self.failures += res.n_failed_pairs
+        self.last = res
+        finite = (np.isfinite(res.position).all(axis=1) & np.isfinite(res.normal).all(axis=1)
+                  & np.isfinite(res.point_a).all(axis=1) & np.isfinite(res.point_b).all(axis=1)
+                  & np.isfinite(res.depth))
+        if not finite.all():           # never publish a NaN or an Inf
+            self._warn("non-finite contact", "dropped non-finite contacts",
+                       int((~finite).sum()))
+            res = ContactSet.select(res, finite)
         frame = self.cfg["frame_id"]
         self.pub_contacts.publish(
             msg_adapters.contacts_to_contact_array(res, self.stamp, frame))
@@ -186,6 +469,52 @@ class CollisionNode(Node):
             self.pub_markers.publish(msg_adapters.contacts_to_marker_array(
                 res, self.stamp, frame, self.cfg["marker_normal_length"],
                 self.cfg["max_marker_arrows"]))
+        now = _seconds(self.get_clock().now().to_msg())
+        self.latency.append(now - self.newest)
+
+    # -- diagnostics --------------------------------------------------------------
+    def diagnostics(self):
+        """The node's health as a DiagnosticStatus (level, message and values)."""
+        now = time.monotonic()
+        rate = (self.steps - self._diag_steps) / max(now - self._diag_t, 1e-9)
+        self._diag_steps, self._diag_t = self.steps, now
+        lat = np.array(self.latency) if self.latency else np.zeros(1)
+        res = self.last
+        level, why = DiagnosticStatus.OK, "ok"
+        if self.step_errors:
+            level, why = DiagnosticStatus.ERROR, f"{self.step_errors} step(s) failed"
+        elif self.stamp is None:
+            level, why = DiagnosticStatus.WARN, "no pose received yet"
+        elif self.n_stale:
+            level, why = DiagnosticStatus.WARN, f"{self.n_stale} stale bodies"
+        elif self.failures:
+            level, why = DiagnosticStatus.WARN, f"{self.failures} narrow-phase failures"
+        elif sum(self.dropped.values()):
+            level, why = DiagnosticStatus.WARN, "input dropped: " + ", ".join(
+                f"{k} {v}" for k, v in sorted(self.dropped.items()))
+        values = {
+            "kernels ready (s)": f"{self.warm_up_s:.2f}",
+            "steps": self.steps, "step rate (Hz)": f"{rate:.1f}",
+            "latency p50 (ms)": f"{1e3 * np.percentile(lat, 50):.3f}",
+            "latency p99 (ms)": f"{1e3 * np.percentile(lat, 99):.3f}",
+            "bodies": len(self.scene), "stale bodies": self.n_stale,
+            "oldest pose age (s)": f"{self.oldest_age:.3f}",
+            "narrow-phase pairs": res.n_narrowphase_pairs if res else 0,
+            "touching pairs": len(res.pairs) if res else 0,
+            "contacts": len(res.contact_id) if res else 0,
+            "narrow-phase failures": self.failures, "step errors": self.step_errors,
+        }
+        values.update({f"dropped: {k}": v for k, v in sorted(self.dropped.items())})
+        return DiagnosticStatus(
+            level=level, name=f"{self.get_name()}: collision pipeline", message=why,
+            hardware_id=self.get_fully_qualified_name(),
+            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])
+
+    def _publish_diagnostics(self):
+        msg = DiagnosticArray()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.status = [self.diagnostics()]
+        self.pub_diag.publish(msg)
 
     # -- services -----------------------------------------------------------------
     def _on_check_collision(self, request, response):
@@ -215,8 +544,9 @@ class CollisionNode(Node):
         posed = sc.posed.copy()
         if len(request.positions) or len(request.orientations):
             _, gp, gq = msg_adapters.body_pose_array_to_arrays(request)
-            bad = [f"{n}: {POSE_PROBLEMS[why]}" for n, why in zip(names, pose_problems(gp, gq))
-                   if why]
+            why = pose_problems(gp, gq, self.cfg["max_abs_coordinate"],
+                                self.cfg["quaternion_tolerance"])
+            bad = [f"{n}: {POSE_PROBLEMS[w]}" for n, w in zip(names, why) if w]
             if bad:
                 raise ValueError("bad poses: " + "; ".join(bad))
             pos[idx], quat[idx] = gp, gq / np.linalg.norm(gq, axis=1)[:, None]
@@ -228,13 +558,13 @@ class CollisionNode(Node):
         return contacts, missing
 
 
-def _seconds(stamp):
-    """builtin_interfaces/Time -> float seconds."""
-    return stamp.sec + 1e-9 * stamp.nanosec
-
-
 def main(args=None):
-    rclpy.init(args=args)
+    log = rclpy.logging.get_logger("collision_node")
+    try:
+        rclpy.init(args=args)
+    except Exception as err:  # noqa: BLE001 - e.g. a missing or unparsable params file
+        log.fatal(f"cannot start: {str(err).splitlines()[0] if str(err) else err!r}")
+        return 1
     node = None
     code = 0
     try:
@@ -243,7 +573,10 @@ def main(args=None):
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except ValueError as err:  # ConfigError and invalid bodies: one clear line, exit 1
-        rclpy.logging.get_logger("collision_node").fatal(f"invalid configuration: {err}")
+        log.fatal(f"invalid configuration: {err}")
+        code = 1
+    except Exception as err:  # noqa: BLE001 - rclpy's own parameter errors at start
+        log.fatal(f"invalid configuration: {type(err).__name__}: {err}")
         code = 1
     finally:
         if node is not None:

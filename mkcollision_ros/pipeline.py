@@ -202,7 +202,9 @@ class StepResult(ContactSet):
         by edits (a removed body) come first.
     names is the scene's own list (do not modify it)
     timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the
-    filter; n_narrowphase_pairs: pairs after the filter
+    filter; n_narrowphase_pairs: pairs after the filter; n_failed_pairs: pairs whose
+    narrow phase failed (status FAILED: an iteration cap, a degenerate input or a
+    non-finite result); their arbiters live on for ``stale_steps``
     """
     stamp: float
     pairs: np.ndarray
@@ -211,6 +213,7 @@ class StepResult(ContactSet):
     timings: dict
     n_candidate_pairs: int
     n_narrowphase_pairs: int
+    n_failed_pairs: int
 
 
 class Bounds(NamedTuple):
@@ -281,6 +284,13 @@ class Pipeline:
         self.parallel_min_cheap_items = PARALLEL_MIN_CHEAP_ITEMS
         self.arbiters = ArbiterSet(config.merge_distance, config.drift_threshold,
                                    config.max_contacts, config.stale_steps)
+        self._pending = Events.empty()
+
+    def end_contacts(self):
+        """End every pair's contacts now (a time reset, as when a bag loops); their
+        ``ended`` events come first in the next step's result.  Contact ids keep
+        counting up."""
+        self._pending = Events.concat(self._pending, self.arbiters.end_all())
 
     @property
     def names(self):
@@ -355,7 +365,9 @@ class Pipeline:
             clock.append(time.perf_counter())
             timings[phase] = clock[-1] - clock[-2]
 
-        edit_events = self.arbiters.end_bodies(self.scene.take_ended())
+        edit_events = Events.concat(self._pending,
+                                    self.arbiters.end_bodies(self.scene.take_ended()))
+        self._pending = Events.empty()
         view = self.scene.view()
         lap("edits")
         bounds = self._bounds(view)
@@ -494,7 +506,8 @@ class Pipeline:
             depth=con["depth"], contact_id=con["contact_id"], age=con["age"],
             method=con["method"], status=con["status"], proximity=proximity,
             events=events, timings=timings, n_candidate_pairs=int(n_candidates),
-            n_narrowphase_pairs=int(len(narrow.pairs)))
+            n_narrowphase_pairs=int(len(narrow.pairs)),
+            n_failed_pairs=int(np.count_nonzero(classified.undecided_status == ST_FAILED)))
 
     def warm_up(self):
         """Compile (or load from the on-disk cache) every kernel on a tiny scene, so the

@@ -118,7 +118,7 @@ class SceneView(NamedTuple):
     """What one step reads of a scene (views of its arrays, valid until the next edit).
 
     table: the ShapeTable over slots [0, S); active int64 (A,) sorted slots that
-    collide (in use and posed), or None when all S do; static bool (S,), group, mask
+    collide (in use, posed and enabled), or None when all S do; static bool (S,), group, mask
     int64 (S,); positions float64 (S, 3) m, orientations float64 (S, 4) unit
     quat_xyzw; allowed int64 (K,) sorted pair keys that never collide."""
     table: ShapeTable
@@ -150,7 +150,7 @@ class Scene:
         self._allowed = set()             # frozensets of two names
         self._allowed_keys = None
         self._ended = []
-        self._n_posed = 0
+        self._n_active = 0
         self.version = 0                  # +1 per edit (not per pose update)
         self._grow(max(8, len(bodies)))
         self.add_bodies(bodies)
@@ -167,7 +167,8 @@ class Scene:
                  ("_static", (), bool, True), ("_group", (), np.int64, 0),
                  ("_mask", (), np.int64, 0), ("_pos", (3,), np.float64, 0.0),
                  ("_quat", (4,), np.float64, IDENTITY), ("_stamp", (), np.float64, np.nan),
-                 ("_posed", (), bool, False), ("_used", (), bool, False))
+                 ("_posed", (), bool, False), ("_used", (), bool, False),
+                 ("_enabled", (), bool, True))
         for attr, tail, dtype, fill in fills:
             new = np.empty((cap,) + tail, dtype)
             if old:
@@ -247,6 +248,7 @@ class Scene:
             self.names[slot] = body.name
             self.index[body.name] = slot
             self._used[slot] = True
+            self._enabled[slot] = True
             self._write(slot, body, code, prm, verts)
             self._stamp[slot] = np.nan
             if body.pose is not None:
@@ -332,7 +334,7 @@ class Scene:
     def _edited(self):
         self.version += 1
         self._allowed_keys = None
-        self._n_posed = None
+        self._n_active = None
 
     def _slot(self, name):
         if name not in self.index:
@@ -340,19 +342,21 @@ class Scene:
         return self.index[name]
 
     # -- poses --------------------------------------------------------------------
-    def set_poses(self, names, positions, orientations, stamp=None):
+    def set_poses(self, names, positions, orientations, stamp=None, **limits):
         """Set poses by name.  Bad entries are dropped one by one and described:
-        unknown names, non-finite values, zero quaternions.  Returns (applied count,
-        problems list of str)."""
+        unknown names, non-finite values, zero quaternions, a body named twice (all its
+        entries: no "last wins"), and what ``limits`` (``max_abs``, ``quat_tolerance``:
+        see ``pose_problems``) refuse.  Returns (applied count, problems list of str)."""
         names = list(names)
         slots = np.fromiter((self.index.get(n, -1) for n in names), np.int64, len(names))
         problems = [f"{n}: unknown body" for n, s in zip(names, slots) if s < 0]
         ok = slots >= 0
         applied, bad = self.set_poses_at(slots[ok], np.asarray(positions, float)[ok],
-                                         np.asarray(orientations, float)[ok], stamp)
+                                         np.asarray(orientations, float)[ok], stamp, **limits)
         return applied, problems + bad
 
-    def set_poses_at(self, slots, positions, orientations, stamp=None):
+    def set_poses_at(self, slots, positions, orientations, stamp=None, max_abs=None,
+                     quat_tolerance=None):
         """Set the poses of bodies ``slots`` (int64 (K,)); as ``set_poses``."""
         slots = np.asarray(slots, np.int64).reshape(-1)
         pos = np.asarray(positions, np.float64).reshape(-1, 3)
@@ -362,11 +366,17 @@ class Scene:
                              f"orientations: the lengths must agree")
         in_use = (slots >= 0) & (slots < len(self.names))
         in_use[in_use] = self._used[slots[in_use]]
-        why = pose_problems(pos, quat)
+        why = pose_problems(pos, quat, max_abs, quat_tolerance)
+        if len(slots) > 1:
+            uniq, counts = np.unique(slots, return_counts=True)
+            if counts.max() > 1:
+                why[np.isin(slots, uniq[counts > 1])] = 5
         good = in_use & (why == 0)
         problems = [f"slot {slots[k]}: no such body" if not in_use[k]
                     else f"{self.names[slots[k]]}: {POSE_PROBLEMS[why[k]]}"
                     for k in np.flatnonzero(~good)]
+        if len(problems) > 1:
+            problems = list(dict.fromkeys(problems))     # a duplicate is said once
         good_quat = quat[good]
         self._write_poses(slots[good], pos[good],
                           good_quat / np.linalg.norm(good_quat, axis=1)[:, None], stamp)
@@ -383,7 +393,7 @@ class Scene:
             self._stamp[slots] = float(stamp)
         if not self._posed[slots].all():
             self._posed[slots] = True
-            self._n_posed = None
+            self._n_active = None
 
     # -- reading ------------------------------------------------------------------
     @property
@@ -439,6 +449,21 @@ class Scene:
         """float64 (n_slots,) s: each body's last pose stamp (NaN: none yet)."""
         return self._stamp[:len(self.names)]
 
+    def set_enabled(self, enabled):
+        """Which bodies may collide: bool (n_slots,); a disabled body keeps its pose and
+        slot but takes no part in the broad phase (the node's stale policy)."""
+        enabled = np.asarray(enabled, bool)
+        if enabled.shape != (len(self.names),):
+            raise ValueError(f"enabled must have {len(self.names)} entries")
+        if not np.array_equal(enabled, self._enabled[:len(self.names)]):
+            self._enabled[:len(self.names)] = enabled
+            self._n_active = None
+
+    @property
+    def enabled(self):
+        """bool (n_slots,): may collide (see set_enabled)."""
+        return self._enabled[:len(self.names)]
+
     @property
     def used(self):
         """bool (n_slots,): the slot holds a body."""
@@ -470,9 +495,10 @@ class Scene:
     def view(self):
         """A SceneView for one step."""
         s = len(self.names)
-        if self._n_posed is None:
-            self._n_posed = int(np.count_nonzero(self._posed[:s]))
-        active = None if self._n_posed == s else np.flatnonzero(self._posed[:s])
+        if self._n_active is None:
+            self._n_active = int(np.count_nonzero(self._posed[:s] & self._enabled[:s]))
+        active = (None if self._n_active == s
+                  else np.flatnonzero(self._posed[:s] & self._enabled[:s]))
         return SceneView(self.table, active, self.static, self.group, self.mask,
                          self.positions, self.orientations, self.allowed_keys())
 
@@ -484,18 +510,26 @@ class Scene:
         return out
 
 
-POSE_PROBLEMS = ("", "non-finite value", "zero quaternion")
+POSE_PROBLEMS = ("", "non-finite value", "zero quaternion", "coordinate beyond the limit",
+                 "non-unit quaternion", "duplicate body in one update")
 
 
-def pose_problems(positions, orientations):
-    """What is wrong with each pose (positions (K, 3), quat_xyzw (K, 4)): int64 (K,)
-    codes into POSE_PROBLEMS, 0 for a good pose."""
+def pose_problems(positions, orientations, max_abs=None, quat_tolerance=None):
+    """What is wrong with each pose (positions (K, 3) m, quat_xyzw (K, 4)): int64 (K,)
+    codes into POSE_PROBLEMS, 0 for a good pose.  ``max_abs`` (m): a coordinate beyond
+    it is refused (a finite 1e308 overflows once squared); ``quat_tolerance``: a
+    quaternion whose norm is farther than this from 1 is refused (closer ones are
+    normalised; tf2 uses 0.01).  None: no such limit."""
     pos = np.asarray(positions, np.float64).reshape(-1, 3)
     quat = np.asarray(orientations, np.float64).reshape(-1, 4)
     finite = np.isfinite(pos).all(axis=1) & np.isfinite(quat).all(axis=1)
     with np.errstate(invalid="ignore", over="ignore"):
         norms = np.sqrt(np.sum(quat * quat, axis=1))
     code = np.zeros(len(pos), np.int64)
+    if quat_tolerance is not None:
+        code[finite & ~(np.abs(norms - 1.0) <= quat_tolerance)] = 4
+    if max_abs is not None:
+        code[finite & ~(np.abs(pos) <= max_abs).all(axis=1)] = 3
     code[finite & ~(norms > QUAT_MIN_NORM)] = 2
     code[~finite] = 1
     return code

@@ -18,8 +18,9 @@ from mkcollision_ros.config import bodies_from_params, load_params_file
 from mkcollision_ros.demo import default_params_file, die_with_parent, node_executable
 
 
-def start_node(params_file):
-    return subprocess.Popen([node_executable(), "--ros-args", "--params-file", params_file],
+def start_node(params_file, *ros_args):
+    return subprocess.Popen([node_executable(), "--ros-args", "--params-file", params_file,
+                             *ros_args],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                             start_new_session=True, preexec_fn=die_with_parent)
 
@@ -93,6 +94,48 @@ def test_broken_config_exits_with_a_clear_message(tmp_path):
         log = stop(proc)
     assert proc.returncode == 1, log
     assert "invalid configuration" in log and "'radius' must be > 0" in log, log
+
+
+def test_missing_params_file_and_typo_give_one_line(tmp_path):
+    proc = start_node(str(tmp_path / "missing.yaml"))
+    try:
+        proc.wait(timeout=60)
+    finally:
+        log = stop(proc)
+    assert proc.returncode == 1, log
+    assert "Traceback" not in log and "cannot start" in log, log
+    typo = tmp_path / "typo.yaml"
+    typo.write_text("/**:\n  ros__parameters:\n    rate_hzz: 5.0\n    bodies:\n"
+                    "      names: [x]\n      x: {type: sphere, radius: 1.0}\n")
+    proc = start_node(str(typo))
+    try:
+        proc.wait(timeout=240)
+    finally:
+        log = stop(proc)
+    assert proc.returncode == 1, log
+    assert "unknown parameter 'rate_hzz'" in log and "Traceback" not in log, log
+
+
+def test_shipped_params_work_under_a_namespace_and_a_new_node_name():
+    proc = start_node(default_params_file(), "-r", "__ns:=/robot1", "-r", "__node:=checker")
+    h = RosHarness()
+    try:
+        probe = h.node("probe")
+        got = []
+        probe.create_subscription(ContactArray, "/robot1/contacts", got.append, 10)
+        pub = probe.create_publisher(BodyPoseArray, "/robot1/body_poses", 10)
+        msg = msg_adapters.arrays_to_body_pose_array(
+            ["ball_0", "ball_1"], np.array([[0.0, 0, 3], [0.0, 0.45, 3]]),
+            np.tile([0.0, 0, 0, 1], (2, 1)), Time(sec=78))
+        ok = h.spin_until(lambda: any(m.header.stamp.sec == 78 for m in got),
+                          timeout=900.0, step=lambda: pub.publish(msg))
+        assert ok, "no ContactArray under /robot1:\n" + stop(proc)
+        m = next(m for m in got if m.header.stamp.sec == 78)
+        assert ("ball_0", "ball_1") in list(zip(m.body_a, m.body_b))
+    finally:
+        h.close()
+        log = stop(proc)
+    assert proc.returncode == 0, log
 
 
 def test_demo_runs_the_real_node_and_reports_contacts():

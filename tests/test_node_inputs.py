@@ -1,0 +1,248 @@
+"""The collision node's parameters, QoS, triggering, stamps, bad input and diagnostics,
+in-process over real DDS: a probe node publishes, calls the parameter services as
+``ros2 param`` does, and reads the outputs."""
+import math
+
+import numpy as np
+import pytest
+from ros_harness import RosHarness  # noqa: I001  (sets ROS_DOMAIN_ID before rclpy)
+
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mkcollision_msgs.msg import ContactArray
+from mkcollision_msgs.msg import BodyPoseArray
+from rcl_interfaces.srv import DescribeParameters, SetParameters
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+import msg_adapters
+from mkcollision_ros.node import CollisionNode, ConfigError
+
+ID = [0.0, 0.0, 0.0, 1.0]
+NAMES = ["a", "b", "far"]
+
+
+def overrides(**extra):
+    base = {"bodies.names": NAMES, "bodies.a.type": "sphere", "bodies.a.radius": 0.5,
+            "bodies.b.type": "sphere", "bodies.b.radius": 0.5,
+            "bodies.far.type": "box", "bodies.far.size": [1.0, 1.0, 1.0],
+            "warn_throttle_s": 0.0, "diagnostics_period_s": 0.2}
+    base.update(extra)
+    return [Parameter(k, value=v) for k, v in base.items()]
+
+
+class Probe:
+    """A node under test plus a probe: publish poses, wait for answers."""
+
+    def __init__(self, **extra):
+        self.h = RosHarness()
+        self.node = self.h.add(CollisionNode(context=self.h.context,
+                                             parameter_overrides=overrides(**extra)))
+        self.probe = self.h.node("probe")
+        self.contacts, self.diag = [], []
+        self.probe.create_subscription(ContactArray, "contacts", self.contacts.append, 50)
+        self.probe.create_subscription(DiagnosticArray, "/diagnostics", self.diag.append, 10)
+        self.best_effort = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self.pub = self.probe.create_publisher(BodyPoseArray, "body_poses", self.best_effort)
+        self.sec = 100
+
+    def msg(self, gap=0.1, sec=None, names=NAMES, pos=None, quat=None, frame="world",
+            nanosec=0):
+        if pos is None:
+            pos = [[0.0, 0, 0], [1.0 + gap, 0, 0], [20.0, 0, 0]]
+        if quat is None:
+            quat = [ID] * len(names)
+        if sec is None:
+            self.sec += 1
+            sec = self.sec
+        return msg_adapters.arrays_to_body_pose_array(
+            names, np.asarray(pos, float), np.asarray(quat, float),
+            Time(sec=sec, nanosec=nanosec), frame)
+
+    def send(self, msg, wait=True, timeout=20.0):
+        """Publish until the node answers with msg's stamp (or, wait=False, spin a bit
+        and return whether it answered)."""
+        stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+
+        def answered():
+            return any((m.header.stamp.sec, m.header.stamp.nanosec) == stamp
+                       for m in self.contacts)
+        if wait:
+            assert self.h.spin_until(answered, timeout, step=lambda: self.pub.publish(msg)), \
+                "the node did not answer"
+            return next(m for m in self.contacts
+                        if (m.header.stamp.sec, m.header.stamp.nanosec) == stamp)
+        for _ in range(5):
+            self.pub.publish(msg)
+            self.h.spin_until(lambda: False, 0.1)
+        return answered()
+
+    def call(self, srv_type, name, request):
+        client = self.probe.create_client(srv_type, f"/collision_node/{name}")
+        assert client.wait_for_service(timeout_sec=10.0)
+        fut = client.call_async(request)
+        assert self.h.spin_until(fut.done, 10.0)
+        return fut.result()
+
+    def set(self, name, value):
+        req = SetParameters.Request(parameters=[Parameter(name, value=value).to_parameter_msg()])
+        return self.call(SetParameters, "set_parameters", req).results[0]
+
+    def close(self):
+        self.h.close()
+
+
+@pytest.fixture
+def probe():
+    p = Probe()
+    yield p
+    p.close()
+
+
+def test_parameters_are_described_with_ranges_and_read_only_flags(probe):
+    req = DescribeParameters.Request(names=["max_contacts", "contact_margin", "trigger",
+                                            "method"])
+    d = {x.name: x for x in probe.call(DescribeParameters, "describe_parameters",
+                                       req).descriptors}
+    assert d["max_contacts"].integer_range[0].from_value == 1
+    assert d["max_contacts"].integer_range[0].to_value == 16
+    assert d["contact_margin"].floating_point_range[0].to_value == 1.0
+    assert d["trigger"].read_only and not d["method"].read_only
+    assert "gjk_epa" in d["method"].description and d["contact_margin"].description
+
+
+def test_param_set_is_checked_and_applies_live(probe):
+    probe.send(probe.msg(gap=-0.1))
+    for name, value, reason in [("max_contacts", -1, "max_contacts"), ("method", "foo", "method"),
+                                ("contact_margin", float("nan"), "contact_margin"),
+                                ("bodies.a.radius", -1.0, "radius"),
+                                ("bodies.names", ["a"], "cannot change"),
+                                ("trigger", "timer", "read-only")]:
+        r = probe.set(name, value)
+        assert not r.successful and reason in r.reason, (name, r.reason)
+    assert probe.node.pipeline.config.max_contacts == 4
+    assert probe.node.get_parameter("method").value == "auto"
+    assert probe.set("method", "mpr").successful
+    assert probe.set("max_contacts", 2).successful
+    assert probe.node.pipeline.config.method == "mpr"
+    assert probe.node.pipeline.config.max_contacts == 2
+    m = probe.send(probe.msg(gap=-0.1))
+    assert list(m.methods) == [2]                                    # M_MPR
+    # a body's shape, live: a grows from 0.5 to 0.7, so a 0.1 gap becomes 0.1 deep
+    assert probe.set("bodies.a.radius", 0.7).successful
+    m = probe.send(probe.msg(gap=0.1))
+    assert list(zip(m.body_a, m.body_b)) == [("a", "b")]
+    assert m.depths[0] == pytest.approx(0.1, abs=1e-9)
+
+
+def test_unknown_or_bad_parameters_stop_the_start_naming_the_key():
+    h = RosHarness()
+    try:
+        with pytest.raises(ConfigError, match="unknown parameter 'rate_hzz'"):
+            CollisionNode(context=h.context, parameter_overrides=overrides(rate_hzz=5.0))
+        with pytest.raises(ConfigError, match=r"'max_contacts' must be in \[1, 16\]"):
+            CollisionNode(context=h.context, parameter_overrides=overrides(max_contacts=0))
+        with pytest.raises(ConfigError, match="no bodies configured for node 'collision_node'"
+                                              " in namespace '/robot1'"):
+            CollisionNode(context=h.context, namespace="robot1",
+                          parameter_overrides=[Parameter("rate_hz", value=5.0)])
+        node = CollisionNode(context=h.context, parameter_overrides=overrides(rate_hz=50))
+        assert node.cfg["rate_hz"] == 50.0                     # a YAML int for a float
+        node.destroy_node()
+    finally:
+        h.close()
+
+
+def test_best_effort_publisher_is_heard_and_bad_messages_are_dropped(probe):
+    node = probe.node
+    good = probe.send(probe.msg(gap=-0.1))
+    assert len(good.depths) == 1
+    t_good = good.header.stamp.sec
+    # each of these is dropped, counted under its reason, and the node stays alive
+    cases = [
+        ("wrong frame_id", probe.msg(frame="map")),
+        ("zero stamp", probe.msg(sec=0)),
+        ("future stamp", probe.msg(sec=2_000_000_000)),
+        ("stale stamp", probe.msg(sec=t_good)),                    # repeated
+        ("stale stamp", probe.msg(sec=t_good - 1, nanosec=500_000_000)),     # older
+        ("coordinate beyond the limit", probe.msg(pos=[[1e308, 0, 0], [1.0, 0, 0], [20.0, 0, 0]])),
+        ("non-finite value", probe.msg(pos=[[np.nan, 0, 0], [1.0, 0, 0], [20.0, 0, 0]])),
+        ("zero quaternion", probe.msg(quat=[[0, 0, 0, 0], ID, ID])),
+        ("non-unit quaternion", probe.msg(quat=[[0, 0, 0, 1.5], ID, ID])),
+        ("duplicate body in one update", probe.msg(names=["a", "a", "far"])),
+        ("unknown name", probe.msg(names=["a", "zz", "far"])),
+    ]
+    for reason, msg in cases:
+        before = node.dropped[reason]
+        probe.send(msg, wait=False)
+        assert node.dropped[reason] > before, reason
+    # the entries that were fine in those messages were applied; nothing non-finite
+    assert np.isfinite(node.scene.positions).all()
+    assert node.scene.positions[0, 0] == 0.0
+    # a length mismatch drops the whole message and changes nothing
+    bad = probe.msg(gap=0.5)
+    bad.positions = bad.positions[:-1]
+    before = node.scene.positions.copy()
+    probe.send(bad, wait=False)
+    assert node.dropped["length mismatch"] > 0
+    np.testing.assert_array_equal(node.scene.positions, before)
+    # a slightly non-unit quaternion is normalised, and the node still answers
+    m = probe.send(probe.msg(gap=-0.1, quat=[[0, 0, 0, 1.005], ID, ID]))
+    assert len(m.depths) == 1 and m.depths[0] == pytest.approx(0.1, abs=1e-9)
+    assert all(math.isfinite(v) for v in m.positions)
+
+
+def test_unknown_names_are_warned_once_per_name(probe):
+    logged = []
+    probe.node.get_logger().warning = lambda text, **kw: logged.append(text)
+    for _ in range(3):
+        probe.send(probe.msg(names=["a", "zz", "far"]), wait=False)
+    assert sum("zz" in t for t in logged) == 1
+    assert probe.node.dropped["unknown name"] >= 3
+
+
+def test_time_reset_ends_contacts_and_takes_the_new_time(probe):
+    probe.send(probe.msg(gap=-0.1, sec=5000))
+    ids = list(probe.send(probe.msg(gap=-0.1, sec=5001)).ids)
+    m = probe.send(probe.msg(gap=-0.1, sec=10))                 # a bag looped
+    assert m.header.stamp.sec == 10 and len(m.ids) == 1
+    assert list(m.ids) != ids                                   # the contact began anew
+    assert probe.send(probe.msg(gap=-0.1, sec=11)).ids[0] == m.ids[0]
+
+
+def test_stale_bodies_are_reported_and_dropped_by_policy(probe):
+    probe.send(probe.msg(gap=-0.1, sec=200))
+    # b's pose stays at 200 while a and far move on to 203
+    m = probe.send(probe.msg(names=["a", "far"], pos=[[0.0, 0, 0], [20.0, 0, 0]], sec=203))
+    assert len(m.depths) == 1 and probe.node.n_stale == 1          # kept by default
+    assert probe.set("stale_policy", "drop").successful
+    m = probe.send(probe.msg(names=["a", "far"], pos=[[0.0, 0, 0], [20.0, 0, 0]], sec=204))
+    assert len(m.depths) == 0 and probe.node.n_stale == 1
+    m = probe.send(probe.msg(gap=-0.1, sec=205))                   # b fresh again
+    assert len(m.depths) == 1 and probe.node.n_stale == 0
+
+
+def test_diagnostics_report_counts_and_levels(probe):
+    probe.send(probe.msg(gap=-0.1))
+    probe.send(probe.msg(frame="map"), wait=False)
+    probe.diag.clear()
+    assert probe.h.spin_until(lambda: probe.diag, 10.0)
+    status = probe.diag[-1].status[0]
+    values = {kv.key: kv.value for kv in status.values}
+    assert status.level == DiagnosticStatus.WARN and "wrong frame_id" in status.message
+    assert int(values["dropped: wrong frame_id"]) >= 1
+    assert int(values["steps"]) >= 1 and values["bodies"] == "3"
+    assert float(values["latency p99 (ms)"]) >= float(values["latency p50 (ms)"]) >= 0.0
+    assert "kernels ready (s)" in values and values["touching pairs"] == "1"
+
+
+def test_timer_trigger_never_repeats_a_stamp():
+    p = Probe(trigger="timer", rate_hz=50.0)
+    try:
+        p.send(p.msg(gap=-0.1))
+        p.send(p.msg(gap=-0.1))
+        p.h.spin_until(lambda: False, 0.5)              # 25 timer periods, no new poses
+        stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for m in p.contacts]
+        assert len(stamps) == len(set(stamps)) >= 2
+    finally:
+        p.close()

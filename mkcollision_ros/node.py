@@ -162,6 +162,20 @@ METHODS = {"auto": C.M_AUTO, "gjk_epa": C.M_GJK_EPA, "mpr": C.M_MPR}
 LATENCY_WINDOW = 1000      # steps in the latency percentiles
 
 
+def parameter_table():
+    """PARAMETERS as the README's markdown table (a test keeps the README equal to it)."""
+    kinds = {str: "string", float: "double", int: "integer", bool: "bool"}
+    rows = ["| parameter | type | default | range / values | live | meaning |",
+            "|---|---|---|---|---|---|"]
+    for p in PARAMETERS:
+        values = (f"{p.lo:g} .. {p.hi:g}" if p.lo is not None
+                  else " / ".join(p.choices))
+        default = str(p.default).lower() if isinstance(p.default, bool) else p.default
+        rows.append(f"| `{p.name}` | {kinds[type(p.default)]} | `{default}` | {values} | "
+                    f"{'no' if p.read_only else 'yes'} | {p.description} |")
+    return "\n".join(rows) + "\n"
+
+
 class ConfigError(ValueError):
     """The node's parameters cannot describe a valid scene."""
 

@@ -61,3 +61,10 @@ def test_params_file_errors(tmp_path):
     p.write_text("/**:\n  ros__parameters: {rate_hz: 5.0}\n"
                  "collision_node:\n  ros__parameters: {rate_hz: 7.0}\n")
     assert load_params_file(str(p))["rate_hz"] == 7.0
+
+
+def test_readme_parameter_table_is_the_nodes():
+    from mkcollision_ros.node import parameter_table
+    readme = open(os.path.join(os.path.dirname(__file__), "..", "README.md"),
+                  encoding="utf-8").read()
+    assert parameter_table() in readme

@@ -6,9 +6,16 @@ Topics (names are parameters, relative to the node's namespace):
   in   ``pose_array``       geometry_msgs/PoseArray          poses in configured body order
   out  ``contacts``         mkcollision_msgs/ContactArray    every step's contacts
   out  ``contact_markers``  visualization_msgs/MarkerArray   points + normal arrows
+  out  ``contact_events``   mkcollision_msgs/ContactEvents   pairs and contacts that
+                                                             began or ended
+  out  ``proximity``        mkcollision_msgs/ProximityArray  near pairs (proximity > 0)
+  out  ``scene``            mkcollision_msgs/Scene           the bodies, transient local,
+                                                             on each change
   out  ``/diagnostics``     diagnostic_msgs/DiagnosticArray  health, once a period
 Services:
   ``check_collision``       mkcollision_msgs/srv/CheckCollision  stateless query
+  ``edit_scene``            mkcollision_msgs/srv/EditScene       add, replace and remove
+                            bodies and set the allowed pairs, all or none
 
 Pose inputs are best effort, keep last 1 (the sensor-data idea: a best-effort or a
 reliable publisher connects, and a burst leaves only the newest message);
@@ -48,18 +55,21 @@ import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseArray
-from mkcollision_msgs.msg import BodyPoseArray, ContactArray
-from mkcollision_msgs.srv import CheckCollision
+from mkcollision_msgs.msg import (BodyPoseArray, ContactArray, ContactEvents,
+                                  ProximityArray)
+from mkcollision_msgs.msg import Scene as SceneMsg
+from mkcollision_msgs.srv import CheckCollision, EditScene
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from visualization_msgs.msg import MarkerArray
 
 import msg_adapters
 
+from .arbiters import EV_PERSISTED
 from .config import bodies_from_params
 from .kernels import constants as C
 from .pipeline import PIPELINE_METHODS, Pipeline, PipelineConfig
@@ -154,6 +164,11 @@ PARAMETERS = (
           read_only=True),
     Param("contacts_topic", "contacts", "ContactArray output topic", read_only=True),
     Param("markers_topic", "contact_markers", "MarkerArray output topic", read_only=True),
+    Param("events_topic", "contact_events", "ContactEvents output topic", read_only=True),
+    Param("proximity_topic", "proximity", "ProximityArray output topic (published while "
+          "proximity > 0)", read_only=True),
+    Param("scene_topic", "scene", "Scene output topic (transient local, on each change)",
+          read_only=True),
 )
 PARAMS = {p.name: p for p in PARAMETERS}
 # parameters every rclpy node may be given, which the node leaves to rclpy
@@ -196,8 +211,8 @@ class CollisionNode(Node):
         self.scene = Scene(bodies)
         self.pipeline = Pipeline(self.scene, config=PipelineConfig(
             **{k: self.cfg[k] for k in PIPELINE_SETTINGS}))
-        # PoseArray poses go to the configured bodies in their order
-        self.order = np.array([self.scene.index[b["name"]] for b in bodies], np.int64)
+        # PoseArray poses go to the bodies in slot order: bodies.names at start
+        self.order = np.flatnonzero(self.scene.used)
         t0 = time.perf_counter()
         self.pipeline.warm_up()
         self.warm_up_s = time.perf_counter() - t0
@@ -229,9 +244,17 @@ class CollisionNode(Node):
             PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, depth1)
         self.pub_contacts = self.create_publisher(ContactArray, self.cfg["contacts_topic"], 10)
         self.pub_markers = self.create_publisher(MarkerArray, self.cfg["markers_topic"], 10)
+        self.pub_events = self.create_publisher(ContactEvents, self.cfg["events_topic"],
+                                                QoSProfile(depth=100))
+        self.pub_proximity = self.create_publisher(ProximityArray,
+                                                   self.cfg["proximity_topic"], 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.pub_scene = self.create_publisher(SceneMsg, self.cfg["scene_topic"], latched)
         self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.srv_check = self.create_service(CheckCollision, "check_collision",
                                              self._on_check_collision)
+        self.srv_edit = self.create_service(EditScene, "edit_scene", self._on_edit_scene)
+        self._publish_scene()
         self.timer = None
         if self.cfg["trigger"] == "timer":
             self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
@@ -334,6 +357,7 @@ class CollisionNode(Node):
                     if (body["shape"], body["static"], body["group"], body["mask"]) != (
                             old.shape, old.static, old.group, old.mask):
                         self.scene.replace_body(body)
+            self._scene_changed()
         if "rate_hz" in names and self.timer is not None:
             self.destroy_timer(self.timer)
             self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
@@ -479,6 +503,12 @@ class CollisionNode(Node):
         frame = self.cfg["frame_id"]
         self.pub_contacts.publish(
             msg_adapters.contacts_to_contact_array(res, self.stamp, frame))
+        if np.any(res.events.kind != EV_PERSISTED):
+            self.pub_events.publish(msg_adapters.events_to_contact_events(
+                res.events, res.names, self.stamp, frame))
+        if self.cfg["proximity"] > 0.0:
+            self.pub_proximity.publish(msg_adapters.proximity_to_proximity_array(
+                res.proximity, res.names, self.stamp, frame))
         if self.cfg["publish_markers"]:
             self.pub_markers.publish(msg_adapters.contacts_to_marker_array(
                 res, self.stamp, frame, self.cfg["marker_normal_length"],
@@ -544,6 +574,35 @@ class CollisionNode(Node):
         if missing:
             response.message += f"; skipped bodies without a pose: {missing}"
         return response
+
+    def _on_edit_scene(self, request, response):
+        flat = list(request.allowed_pairs)
+        try:
+            if len(flat) % 2:
+                raise ValueError(f"allowed_pairs needs an even number of names, got "
+                                 f"{len(flat)}")
+            bodies = [msg_adapters.body_msg_to_body(b) for b in request.bodies]
+            self.scene.edit(
+                remove=list(request.remove), bodies=bodies,
+                allowed_pairs=([flat[i:i + 2] for i in range(0, len(flat), 2)]
+                               if request.set_allowed_pairs else None))
+        except ValueError as err:
+            response.success, response.message = False, f"nothing changed: {err}"
+            return response
+        self._scene_changed()
+        response.success = True
+        response.message = (f"removed {len(request.remove)}, added or replaced "
+                            f"{len(request.bodies)}; {len(self.scene)} bodies")
+        return response
+
+    def _scene_changed(self):
+        # PoseArray poses go to the bodies in slot order
+        self.order = np.flatnonzero(self.scene.used)
+        self._publish_scene()
+
+    def _publish_scene(self):
+        self.pub_scene.publish(msg_adapters.scene_to_scene_msg(
+            self.scene, self.get_clock().now().to_msg(), self.cfg["frame_id"]))
 
     def _check(self, request):
         sc = self.scene

@@ -187,7 +187,8 @@ class StepResult(ContactSet):
     """Contacts of one step, world frame, metres; C contacts over K touching pairs.
     The contact fields are those of ``results.ContactSet``; a step adds the rest.
 
-    names list[str | None] (S,) slot -> name (None: a free slot); stamp float (s)
+    names list[str | None] (S,) slot -> name (None: a free slot; a body removed before
+    this step keeps its name here, for its ended events); stamp float (s)
     pairs int64 (K, 2): touching pairs (a < b), sorted
     body_a, body_b int64 (C,) slots; contact_id int64 (C,) stable while the contact
     persists; age int64 (C,) steps since it began (0 on its first step)
@@ -200,7 +201,7 @@ class StepResult(ContactSet):
         body_b, contact_id (-1 for pair events); iterates as tuples (kind name
         "began" / "persisted" / "ended", body_a, body_b, contact_id).  The pairs ended
         by edits (a removed body) come first.
-    names is the scene's own list (do not modify it)
+    names is the scene's own list, unless bodies were removed (do not modify it)
     timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the
     filter; n_narrowphase_pairs: pairs after the filter; n_failed_pairs: pairs whose
     narrow phase failed (status FAILED: an iteration cap, a degenerate input or a
@@ -365,8 +366,8 @@ class Pipeline:
             clock.append(time.perf_counter())
             timings[phase] = clock[-1] - clock[-2]
 
-        edit_events = Events.concat(self._pending,
-                                    self.arbiters.end_bodies(self.scene.take_ended()))
+        ended, retired = self.scene.take_ended()
+        edit_events = Events.concat(self._pending, self.arbiters.end_bodies(ended))
         self._pending = Events.empty()
         view = self.scene.view()
         lap("edits")
@@ -387,7 +388,13 @@ class Pipeline:
         lap("arbiters")
         if len(edit_events):
             events = Events.concat(edit_events, events)
-        return self._result(stamp, narrow, classified, events, timings, len(candidates))
+        names = self.scene.names
+        if retired:              # this step's events still name the removed bodies
+            names = list(names)
+            for slot, name in retired.items():
+                names[slot] = name
+        return self._result(names, stamp, narrow, classified, events, timings,
+                            len(candidates))
 
     # -- the phases ---------------------------------------------------------------
     def _reach(self):
@@ -490,7 +497,7 @@ class Pipeline:
             manifolds.normal, manifolds.count, c.undecided_keys, c.touching_status,
             c.touching_method, c.undecided_status, c.undecided_method)
 
-    def _result(self, stamp, narrow, classified, events, timings, n_candidates):
+    def _result(self, names, stamp, narrow, classified, events, timings, n_candidates):
         con = self.arbiters.contacts()
         rows = classified.proximity_rows
         o = narrow.out[rows]
@@ -499,7 +506,7 @@ class Pipeline:
             distance=o[:, OUT_DIST], point_a=o[:, OUT_PA:OUT_PA + 3],
             point_b=o[:, OUT_PB:OUT_PB + 3], normal=o[:, OUT_NORMAL:OUT_NORMAL + 3])
         return StepResult(
-            names=self.scene.names, stamp=stamp, pairs=self.arbiters.pairs(),
+            names=names, stamp=stamp, pairs=self.arbiters.pairs(),
             body_a=con["body_a"], body_b=con["body_b"],
             position=0.5 * (con["point_a"] + con["point_b"]),
             point_a=con["point_a"], point_b=con["point_b"], normal=con["normal"],

@@ -11,8 +11,9 @@ Plain Python + numpy, no ROS.
     scene.remove_body("ball")
 
 Body ids are slots.  A body keeps its slot from ``add_body`` to ``remove_body``; a freed
-slot is reused by a later add (lowest first), so ids stay below the largest number of
-bodies the scene ever held at once.  ``names[slot]`` is the body's name (None for a
+slot is reused by a later add (lowest first) once the pipeline has stepped past the
+removal (``take_ended``), so the events of that step still name the removed body, and
+ids stay below the largest number of bodies the scene ever held at once.  ``names[slot]`` is the body's name (None for a
 free slot); pair results (``Pipeline.step``) name bodies by slot.
 
 A body is a dict (or a ``Body``):
@@ -143,6 +144,7 @@ class Scene:
         self.index = {}                   # name -> slot
         self._bodies = []                 # slot -> Body or None
         self._free = []                   # heap of free slots
+        self._retired = {}                # slot -> name: removed, not yet taken
         self._cap = 0
         self._verts = np.zeros((0, 3))
         self._n_verts = 0
@@ -225,48 +227,118 @@ class Scene:
 
     def add_bodies(self, bodies):
         """Add several bodies, all or none; returns their slots (int list)."""
-        if not isinstance(bodies, (list, tuple)):
-            raise ValueError(f"bodies must be a list of body dicts, got {bodies!r}")
-        checked, rows, seen = [], [], set()
-        for k, b in enumerate(bodies):
-            body, row = _validate(b, f"body {k}")
-            if body.name in self.index or body.name in seen:
-                raise ValueError(f"body {k}: duplicate name {body.name!r}")
-            seen.add(body.name)
-            checked.append(body)
-            rows.append(row)
-        slots = []
-        for body, (code, prm, verts) in zip(checked, rows):
-            if self._free:
-                slot = heapq.heappop(self._free)
-            else:
-                slot = len(self.names)
-                if slot >= self._cap:
-                    self._grow(2 * self._cap)
-                self.names.append(None)
-                self._bodies.append(None)
-            self.names[slot] = body.name
-            self.index[body.name] = slot
-            self._used[slot] = True
-            self._enabled[slot] = True
-            self._write(slot, body, code, prm, verts)
-            self._stamp[slot] = np.nan
-            if body.pose is not None:
-                self._pos[slot], self._quat[slot] = body.pose
-            else:
-                self._pos[slot] = 0.0
-                self._quat[slot] = IDENTITY
-            self._posed[slot] = body.pose is not None or body.static
-            slots.append(slot)
+        checked = self._check_bodies(bodies, set(self.index))
+        slots = [self._add(body, row) for body, row in checked]
         if slots:
             self._edited()
         return slots
 
     def remove_body(self, name):
-        """Remove a body by name; returns its (now free) slot.  Its pairs end at the
-        pipeline's next step."""
-        slot = self._slot(name)
+        """Remove a body by name (and the allowed pairs naming it); returns its slot,
+        free for reuse after the pipeline's next step, which ends its pairs."""
+        slot = self._remove(self._slot(name))
+        self._compact_verts()
+        self._edited()
+        return slot
+
+    def replace_body(self, body):
+        """Replace the body of the same name (shape, static, group, mask; a given pose
+        also sets its pose).  It keeps its slot; when its shape changes its pairs end at
+        the next step and begin anew.  Returns the slot."""
+        new, row = _validate(body)
+        slot = self._replace(self._slot(new.name), new, row)
+        self._compact_verts()
+        self._edited()
+        return slot
+
+    def set_allowed_pairs(self, pairs):
+        """Replace the allowed-collision pairs: [[name, name], ...] of known bodies."""
+        self._allowed = self._check_allowed(pairs, set(self.index))
+        self._edited()
+
+    def edit(self, remove=(), bodies=(), allowed_pairs=None):
+        """Several edits at once, all or none (a bad one raises ValueError naming it and
+        changes nothing): remove the bodies named in ``remove``, then add each of
+        ``bodies``, or replace the body of its name, then, unless None, replace the
+        allowed pairs with ``allowed_pairs``.  Returns the slots of ``bodies``."""
+        remove = list(remove)
+        for name in remove:
+            self._slot(name)
+        if len(set(remove)) != len(remove):
+            raise ValueError(f"remove names a body twice: {remove}")
+        left = set(self.index) - set(remove)
+        checked = self._check_bodies(bodies, set())
+        names = left | {body.name for body, _ in checked}
+        allowed = None if allowed_pairs is None else self._check_allowed(allowed_pairs, names)
+        for name in remove:
+            self._remove(self.index[name])
+        slots = [self._replace(self.index[body.name], body, row) if body.name in self.index
+                 else self._add(body, row) for body, row in checked]
+        if allowed is not None:
+            self._allowed = allowed
+        self._compact_verts()
+        self._edited()
+        return slots
+
+    def _check_bodies(self, bodies, taken):
+        """Validated (Body, shape row) pairs; names must be new to ``taken`` and to
+        each other."""
+        if not isinstance(bodies, (list, tuple)):
+            raise ValueError(f"bodies must be a list of body dicts, got {bodies!r}")
+        checked, seen = [], set()
+        for k, b in enumerate(bodies):
+            body, row = _validate(b, f"body {k}")
+            if body.name in taken or body.name in seen:
+                raise ValueError(f"body {k}: duplicate name {body.name!r}")
+            seen.add(body.name)
+            checked.append((body, row))
+        return checked
+
+    @staticmethod
+    def _check_allowed(pairs, names):
+        if not isinstance(pairs, (list, tuple)):
+            raise ValueError("allowed_pairs must be a list of [name, name]")
+        new = set()
+        for p in pairs:
+            if (not isinstance(p, (list, tuple)) or len(p) != 2
+                    or not all(isinstance(x, str) for x in p)):
+                raise ValueError(f"allowed_pairs entries must be [name, name], got {p!r}")
+            for nm in p:
+                if nm not in names:
+                    raise ValueError(f"allowed_pairs names unknown body {nm!r}")
+            if p[0] == p[1]:
+                raise ValueError(f"allowed_pairs entry {list(p)!r} names one body twice")
+            new.add(frozenset(p))
+        return new
+
+    def _add(self, body, row):
+        code, prm, verts = row
+        if self._free:
+            slot = heapq.heappop(self._free)
+        else:
+            slot = len(self.names)
+            if slot >= self._cap:
+                self._grow(2 * self._cap)
+            self.names.append(None)
+            self._bodies.append(None)
+        self.names[slot] = body.name
+        self.index[body.name] = slot
+        self._used[slot] = True
+        self._enabled[slot] = True
+        self._write(slot, body, code, prm, verts)
+        self._stamp[slot] = np.nan
+        if body.pose is not None:
+            self._pos[slot], self._quat[slot] = body.pose
+        else:
+            self._pos[slot] = 0.0
+            self._quat[slot] = IDENTITY
+        self._posed[slot] = body.pose is not None or body.static
+        return slot
+
+    def _remove(self, slot):
+        name = self.names[slot]
         del self.index[name]
+        self._allowed = {p for p in self._allowed if name not in p}
         self.names[slot] = None
         self._used[slot] = False
         self._bodies[slot] = None
@@ -280,23 +352,17 @@ class Scene:
         self._mask[slot] = 0
         self._posed[slot] = False
         self._stamp[slot] = np.nan
-        heapq.heappush(self._free, slot)
+        self._retired[slot] = name
         self._ended.append(slot)
-        self._compact_verts()
-        self._edited()
         return slot
 
-    def replace_body(self, body):
-        """Replace the body of the same name (shape, static, group, mask; a given pose
-        also sets its pose).  It keeps its slot; when its shape changes its pairs end at
-        the next step and begin anew.  Returns the slot."""
-        new, (code, prm, verts) = _validate(body)
-        slot = self._slot(new.name)
+    def _replace(self, slot, new, row):
+        code, prm, verts = row
         old = self._bodies[slot]
+        first = self._vrange[slot, 0]
         shape_changed = (code != self._codes[slot] or not np.array_equal(prm, self._params[slot])
                          or len(verts) != self._vlen[slot]
-                         or not np.array_equal(verts, self._verts[
-                             self._vrange[slot, 0]:self._vrange[slot, 0] + len(verts)]))
+                         or not np.array_equal(verts, self._verts[first:first + len(verts)]))
         if shape_changed:
             self._write(slot, new, code, prm, verts)
             self._ended.append(slot)
@@ -309,27 +375,7 @@ class Scene:
             self._posed[slot] = True
         elif new.static and not old.static:
             self._posed[slot] = True
-        self._compact_verts()
-        self._edited()
         return slot
-
-    def set_allowed_pairs(self, pairs):
-        """Replace the allowed-collision pairs: [[name, name], ...] of known bodies."""
-        if not isinstance(pairs, (list, tuple)):
-            raise ValueError("allowed_pairs must be a list of [name, name]")
-        new = set()
-        for p in pairs:
-            if (not isinstance(p, (list, tuple)) or len(p) != 2
-                    or not all(isinstance(x, str) for x in p)):
-                raise ValueError(f"allowed_pairs entries must be [name, name], got {p!r}")
-            for nm in p:
-                if nm not in self.index:
-                    raise ValueError(f"allowed_pairs names unknown body {nm!r}")
-            if p[0] == p[1]:
-                raise ValueError(f"allowed_pairs entry {list(p)!r} names one body twice")
-            new.add(frozenset(p))
-        self._allowed = new
-        self._edited()
 
     def _edited(self):
         self.version += 1
@@ -504,10 +550,14 @@ class Scene:
 
     def take_ended(self):
         """Slots whose pairs must end (removed, or a new shape) since the last call,
-        int64 sorted; the pipeline calls it once per step."""
+        int64 sorted, and the names of the removed ones (dict slot -> name); their
+        slots become free for reuse.  The pipeline calls it once per step."""
         out = np.unique(np.array(self._ended, np.int64))
-        self._ended = []
-        return out
+        retired = self._retired
+        for slot in retired:
+            heapq.heappush(self._free, slot)
+        self._ended, self._retired = [], {}
+        return out, retired
 
 
 POSE_PROBLEMS = ("", "non-finite value", "zero quaternion", "coordinate beyond the limit",

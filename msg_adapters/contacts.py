@@ -9,7 +9,9 @@ float64 (C, 3) world frame, ``depth`` float64 (C,) >= 0, ``contact_id`` int64 (C
 """
 import numpy as np
 from geometry_msgs.msg import Point, Vector3
-from mkcollision_msgs.msg import Contact, ContactArray
+from mkcollision_msgs.msg import Contact, ContactArray, ContactEvents, ProximityArray
+
+from mkcollision_ros.arbiters import EV_PERSISTED
 
 from ._arrays import pack, view
 
@@ -80,3 +82,33 @@ def contacts_to_contact_list(contacts):
         c.status = int(contacts.status[k])
         out.append(c)
     return out
+
+
+def events_to_contact_events(events, names, stamp=None, frame_id="world"):
+    """A step's ``arbiters.Events`` -> ``ContactEvents`` with its began and ended events
+    (persisting ones left out); ``names`` maps body ids to names."""
+    msg = ContactEvents()
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    keep = np.asarray(events.kind) != EV_PERSISTED
+    msg.kinds = pack(np.asarray(events.kind)[keep], "B", np.uint8)
+    msg.body_a = [names[i] for i in np.asarray(events.body_a)[keep]]
+    msg.body_b = [names[i] for i in np.asarray(events.body_b)[keep]]
+    msg.ids = pack(np.asarray(events.contact_id)[keep], "q", np.int64)
+    return msg
+
+
+def proximity_to_proximity_array(proximity, names, stamp=None, frame_id="world"):
+    """A step's ``pipeline.ProximitySet`` -> ``ProximityArray``."""
+    msg = ProximityArray()
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.body_a = [names[i] for i in proximity.body_a]
+    msg.body_b = [names[i] for i in proximity.body_b]
+    msg.distances = pack(proximity.distance, "d", np.float64)
+    msg.points_a = pack(proximity.point_a, "d", np.float64)
+    msg.points_b = pack(proximity.point_b, "d", np.float64)
+    msg.normals = pack(proximity.normal, "d", np.float64)
+    return msg

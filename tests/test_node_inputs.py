@@ -78,7 +78,9 @@ class Probe:
         return answered()
 
     def call(self, srv_type, name, request):
-        client = self.probe.create_client(srv_type, f"/collision_node/{name}")
+        """Call a service of the node (a bare name: one of its parameter services)."""
+        client = self.probe.create_client(srv_type, name if "/" in name
+                                          else f"/collision_node/{name}")
         assert client.wait_for_service(timeout_sec=10.0)
         fut = client.call_async(request)
         assert self.h.spin_until(fut.done, 10.0)
@@ -244,5 +246,82 @@ def test_timer_trigger_never_repeats_a_stamp():
         p.h.spin_until(lambda: False, 0.5)              # 25 timer periods, no new poses
         stamps = [(m.header.stamp.sec, m.header.stamp.nanosec) for m in p.contacts]
         assert len(stamps) == len(set(stamps)) >= 2
+    finally:
+        p.close()
+
+
+def _body(name, **kw):
+    from mkcollision_msgs.msg import Body
+    b = Body(name=name, default_filter=True)
+    for k, v in kw.items():
+        setattr(b, k, v)
+    return b
+
+
+def test_edit_scene_service_events_proximity_and_scene_readback():
+    from geometry_msgs.msg import Point, Pose
+    from mkcollision_msgs.msg import ContactEvents, ProximityArray
+    from mkcollision_msgs.msg import Scene as SceneMsg
+    from mkcollision_msgs.srv import EditScene
+    from rclpy.qos import DurabilityPolicy
+    from shape_msgs.msg import Mesh, SolidPrimitive
+    p = Probe(proximity=0.5)
+    try:
+        events, prox = [], []
+        p.probe.create_subscription(ContactEvents, "contact_events", events.append, 50)
+        p.probe.create_subscription(ProximityArray, "proximity", prox.append, 50)
+        m = p.send(p.msg(gap=-0.1))
+        assert p.h.spin_until(lambda: events, 5.0)
+        assert list(events[-1].kinds) == [0, 0] and events[-1].ids[0] == -1
+        assert (events[-1].body_a[0], events[-1].body_b[0]) == ("a", "b")
+        cid = m.ids[0]
+        # a bad edit changes nothing
+        bad = EditScene.Request(remove=["a"], bodies=[
+            _body("egg", type="ellipsoid", dimensions=[0.3, 0.2])])
+        r = p.call(EditScene, "/edit_scene", bad)
+        assert not r.success and "takes 3 dimensions" in r.message
+        assert "a" in p.node.scene
+        # remove b, add a SolidPrimitive box next to a, an ellipsoid near it, a mesh far off
+        pose = Pose()
+        pose.position.x, pose.orientation.w = 1.0, 1.0
+        tet = Mesh(vertices=[Point(x=x, y=y, z=z) for x, y, z in
+                             [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]])
+        far = Pose()
+        far.position.x, far.orientation.w = -30.0, 1.0
+        near = Pose()
+        near.position.y, near.orientation.w = 0.7, 1.0
+        req = EditScene.Request(remove=["b"], bodies=[
+            _body("crate", primitive=SolidPrimitive(type=SolidPrimitive.BOX,
+                                                    dimensions=[1.0, 1.0, 1.0]),
+                  has_pose=True, pose=pose),
+            _body("egg", type="ellipsoid", dimensions=[0.1, 0.1, 0.1], has_pose=True,
+                  pose=near),
+            _body("tet", mesh=tet, has_pose=True, pose=far)],
+            set_allowed_pairs=True, allowed_pairs=["a", "tet"])
+        r = p.call(EditScene, "/edit_scene", req)
+        assert r.success, r.message
+        m = p.send(p.msg(names=["a"], pos=[[0.0, 0, 0]]))
+        pairs = list(zip(m.body_a, m.body_b))
+        assert pairs == [("a", "crate")] and m.depths[0] == pytest.approx(0.0, abs=1e-9)
+        assert p.h.spin_until(lambda: any(2 in e.kinds for e in events), 5.0)
+        ended = next(e for e in events if 2 in e.kinds)
+        kinds = list(zip(ended.kinds, ended.body_a, ended.body_b, ended.ids))
+        assert (2, "a", "b", -1) in kinds and (2, "a", "b", cid) in kinds
+        # proximity: egg is 0.1 from a
+        assert p.h.spin_until(lambda: prox and "egg" in prox[-1].body_b, 5.0)
+        last = prox[-1]
+        assert ("a", "egg") in list(zip(last.body_a, last.body_b))
+        k = list(zip(last.body_a, last.body_b)).index(("a", "egg"))
+        assert last.distances[k] == pytest.approx(0.1, abs=1e-9)
+        # a late subscriber gets the current scene
+        got = []
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        p.probe.create_subscription(SceneMsg, "scene", got.append, latched)
+        assert p.h.spin_until(lambda: got, 5.0)
+        names = [b.name for b in got[-1].bodies]
+        assert sorted(names) == ["a", "crate", "egg", "far", "tet"]
+        crate = next(b for b in got[-1].bodies if b.name == "crate")
+        assert crate.type == "box" and list(crate.dimensions) == [1.0, 1.0, 1.0]
+        assert list(got[-1].allowed_pairs) == ["a", "tet"]
     finally:
         p.close()

@@ -50,7 +50,12 @@ def test_slots_are_stable_and_reused():
     assert sc.names == ["a", "b", "c"] and len(sc) == 3
     assert sc.remove_body("b") == 1
     assert sc.names == ["a", None, "c"] and "b" not in sc and len(sc) == 2
-    assert sc.add_body(cube("d")) == 1                    # the freed slot
+    assert sc.add_body(cube("x")) == 3                    # not before the step
+    ended, retired = sc.take_ended()                      # what a step does
+    assert ended.tolist() == [1] and retired == {1: "b"}
+    sc.remove_body("x")
+    sc.take_ended()
+    assert sc.add_body(cube("d")) == 1                    # the freed slot, lowest first
     assert sc.add_body(cube("e")) == 3
     assert sc.index == {"a": 0, "d": 1, "c": 2, "e": 3}
     with pytest.raises(ValueError, match="unknown body 'zz'"):
@@ -62,6 +67,24 @@ def test_slots_are_stable_and_reused():
     with pytest.raises(ValueError, match="body 'g'.*radius"):
         sc.add_bodies([ball("f"), {"name": "g", "shape": {"type": "sphere", "radius": 0}}])
     assert "f" not in sc and sc.version == version and sc.n_slots == 4
+
+
+def test_batched_edits_apply_all_or_none():
+    sc = Scene([ball("a"), ball("b"), ball("c")], allowed_pairs=[["a", "b"], ["b", "c"]])
+    version = sc.version
+    for kw, match in [({"remove": ["zz"]}, "unknown body 'zz'"),
+                      ({"remove": ["a", "a"]}, "twice"),
+                      ({"remove": ["a"], "bodies": [ball("d"), ball("d")]}, "duplicate"),
+                      ({"bodies": [ball("d", r=-1)]}, "radius"),
+                      ({"remove": ["a"], "allowed_pairs": [["a", "c"]]}, "unknown body 'a'")]:
+        with pytest.raises(ValueError, match=match):
+            sc.edit(**kw)
+        assert sc.names == ["a", "b", "c"] and sc.version == version
+    slots = sc.edit(remove=["a"], bodies=[cube("b"), ball("d")])
+    assert slots == [1, 3] and sc.body("b").shape["type"] == "box"
+    assert sc.allowed_pairs() == [["b", "c"]]             # the pair naming a went with it
+    sc.edit(allowed_pairs=[["c", "d"]])
+    assert sc.allowed_pairs() == [["c", "d"]]
 
 
 def test_set_poses_drops_bad_entries_only_and_stamps_each_body():
@@ -138,16 +161,17 @@ def test_edits_keep_the_other_pairs_ids_and_end_the_removed_bodys_pairs():
     assert [tuple(x) for x in r0.pairs] == [(0, 1), (1, 2), (2, 3), (3, 4)]
     ids = dict(zip(zip(r0.body_a.tolist(), r0.body_b.tolist()), r0.contact_id.tolist()))
     p.scene.remove_body("b2")
-    p.scene.add_body(ball("far", pose=at(50.0)))           # reuses slot 2, far away
     p.scene.add_body(ball("b5", pose=at(0.99 * 5)))         # touches b4
     r1 = p.step(stamp=1.0)
     assert [tuple(x) for x in r1.pairs] == [(0, 1), (3, 4), (4, 5)]
+    assert r1.names[2] == "b2" and p.scene.names[2] is None  # named for its events
     # the removed body's pairs end first, with their contacts, before the step's events
     assert r1.events.tolist()[:4] == [("ended", 1, 2, -1), ("ended", 1, 2, ids[(1, 2)]),
                                       ("ended", 2, 3, -1), ("ended", 2, 3, ids[(2, 3)])]
     got = dict(zip(zip(r1.body_a.tolist(), r1.body_b.tolist()), r1.contact_id.tolist()))
     assert got[(0, 1)] == ids[(0, 1)] and got[(3, 4)] == ids[(3, 4)]
-    assert ("began", 4, 5, -1) in r1.events and r1.names[2] == "far"
+    assert ("began", 4, 5, -1) in r1.events
+    assert p.scene.add_body(ball("far", pose=at(50.0))) == 2   # reused after the step
     # a replaced shape ends its pairs and begins them anew; a filter change ends a pair
     p.scene.replace_body(cube("b0", side=1.2, pose=at(-0.1)))
     p.scene.replace_body(ball("b4", group=2, mask=2, pose=at(0.99 * 4)))

@@ -71,6 +71,7 @@ import msg_adapters
 
 from .arbiters import EV_PERSISTED
 from .config import bodies_from_params
+from .crosscheck import cross_check, describe, repro
 from .kernels import constants as C
 from .pipeline import PIPELINE_METHODS, Pipeline, PipelineConfig
 from .query import query_contacts
@@ -78,7 +79,9 @@ from .results import ContactSet
 from .scene import POSE_PROBLEMS, Scene, pose_problems
 
 PIPELINE_SETTINGS = ("method", "contact_margin", "proximity", "merge_distance",
-                     "drift_threshold", "max_contacts", "stale_steps")
+                     "drift_threshold", "max_contacts", "stale_steps", "max_pairs")
+REPROS_PER_STEP = 10       # repro lines logged per step at most (failures, cross-check)
+NO_ID = (1 << 64) - 1      # ContactArray id of a failed pair's entry (no persistent id)
 
 
 @dataclass(frozen=True)
@@ -157,6 +160,14 @@ PARAMETERS = (
     Param("max_future_s", 10.0, "s; a stamp this far ahead of the node's clock is dropped",
           0.0, 1.0e9),
     Param("max_bodies", 100000, "a pose message with more entries is dropped", 1, 10000000),
+    Param("max_pairs", 100000, "narrow-phase pairs per step (0: no cap); past it a step "
+          "runs the first ones and diagnostics report the truncation", 0, 100000000),
+    Param("cross_check", False, "also run MPR and GJK/EPA on every touching pair and count "
+          "their disagreements, each logged with a repro"),
+    Param("cross_check_depth_tol", 1.0e-4, "m; depths further apart are a disagreement",
+          0.0, 1000.0),
+    Param("cross_check_angle_tol", 0.0175, "rad; normals further apart are a disagreement",
+          0.0, 3.1416),
     Param("diagnostics_period_s", 1.0, "s; period of the /diagnostics status", 0.1, 3600.0,
           read_only=True),
     Param("pose_topic", "body_poses", "BodyPoseArray input topic", read_only=True),
@@ -195,6 +206,28 @@ class ConfigError(ValueError):
     """The node's parameters cannot describe a valid scene."""
 
 
+def _with_failed_pairs(res, scene, method):
+    """The step's contacts plus one entry per failed pair: status FAILED, id NO_ID,
+    depth 0, the points at the two bodies' origins and the normal between them."""
+    a, b = res.failed_pairs[:, 0], res.failed_pairs[:, 1]
+    pa, pb = scene.positions[a], scene.positions[b]
+    d = pb - pa
+    norm = np.linalg.norm(d, axis=1)
+    normal = np.where(norm[:, None] > 0, d / np.where(norm > 0, norm, 1.0)[:, None],
+                      [0.0, 0.0, 1.0])
+    k = len(a)
+    cat = np.concatenate
+    return ContactSet(
+        names=res.names, body_a=cat([res.body_a, a]), body_b=cat([res.body_b, b]),
+        position=cat([res.position, 0.5 * (pa + pb)]), point_a=cat([res.point_a, pa]),
+        point_b=cat([res.point_b, pb]), normal=cat([res.normal, normal]),
+        depth=cat([res.depth, np.zeros(k)]),
+        contact_id=cat([res.contact_id.astype(np.uint64), np.full(k, NO_ID, np.uint64)]),
+        age=cat([res.age, np.zeros(k, np.int64)]),
+        method=cat([res.method, np.full(k, method, np.int64)]),
+        status=cat([res.status, np.full(k, C.ST_FAILED, np.int64)]))
+
+
 def _seconds(stamp):
     """builtin_interfaces/Time -> float seconds."""
     return stamp.sec + 1e-9 * stamp.nanosec
@@ -225,6 +258,9 @@ class CollisionNode(Node):
         self.steps = 0
         self.dropped = collections.Counter()      # reason -> entries or messages
         self.failures = 0                          # narrow-phase FAILED pairs, summed
+        self.truncated_steps = 0
+        self.cross_checked = 0
+        self.disagreements = 0
         self.step_errors = 0
         self.latency = collections.deque(maxlen=LATENCY_WINDOW)
         self.n_stale = 0
@@ -492,17 +528,32 @@ class CollisionNode(Node):
             return
         self.steps += 1
         self.failures += res.n_failed_pairs
+        self.truncated_steps += res.n_truncated_pairs > 0
         self.last = res
-        finite = (np.isfinite(res.position).all(axis=1) & np.isfinite(res.normal).all(axis=1)
-                  & np.isfinite(res.point_a).all(axis=1) & np.isfinite(res.point_b).all(axis=1)
-                  & np.isfinite(res.depth))
+        if res.n_truncated_pairs:
+            self._warn("truncated step", f"step truncated: {res.n_truncated_pairs} of "
+                       f"{res.n_narrowphase_pairs} pairs not run (max_pairs = "
+                       f"{self.cfg['max_pairs']})", 0)
+        contacts = res
+        if res.n_failed_pairs:
+            for a, b in res.failed_pairs[:REPROS_PER_STEP]:
+                self.get_logger().error(
+                    f"narrow phase failed on {res.names[a]}-{res.names[b]}; repro: "
+                    f"{repro(self.scene, a, b, self.cfg['method'])}")
+            contacts = _with_failed_pairs(contacts, self.scene, METHODS[self.cfg["method"]])
+        if self.cfg["cross_check"]:
+            self._cross_check(res.pairs)
+        finite = (np.isfinite(contacts.position).all(axis=1)
+                  & np.isfinite(contacts.normal).all(axis=1)
+                  & np.isfinite(contacts.point_a).all(axis=1)
+                  & np.isfinite(contacts.point_b).all(axis=1) & np.isfinite(contacts.depth))
         if not finite.all():           # never publish a NaN or an Inf
             self._warn("non-finite contact", "dropped non-finite contacts",
                        int((~finite).sum()))
-            res = ContactSet.select(res, finite)
+            contacts = ContactSet.select(contacts, finite)
         frame = self.cfg["frame_id"]
         self.pub_contacts.publish(
-            msg_adapters.contacts_to_contact_array(res, self.stamp, frame))
+            msg_adapters.contacts_to_contact_array(contacts, self.stamp, frame))
         if np.any(res.events.kind != EV_PERSISTED):
             self.pub_events.publish(msg_adapters.events_to_contact_events(
                 res.events, res.names, self.stamp, frame))
@@ -511,10 +562,18 @@ class CollisionNode(Node):
                 res.proximity, res.names, self.stamp, frame))
         if self.cfg["publish_markers"]:
             self.pub_markers.publish(msg_adapters.contacts_to_marker_array(
-                res, self.stamp, frame, self.cfg["marker_normal_length"],
+                contacts, self.stamp, frame, self.cfg["marker_normal_length"],
                 self.cfg["max_marker_arrows"]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
+
+    def _cross_check(self, pairs):
+        n, found = cross_check(self.scene, pairs, self.cfg["cross_check_depth_tol"],
+                               self.cfg["cross_check_angle_tol"])
+        self.cross_checked += n
+        self.disagreements += len(found)
+        for d in found[:REPROS_PER_STEP]:
+            self.get_logger().warning(describe(d, self.scene))
 
     # -- diagnostics --------------------------------------------------------------
     def diagnostics(self):
@@ -533,6 +592,11 @@ class CollisionNode(Node):
             level, why = DiagnosticStatus.WARN, f"{self.n_stale} stale bodies"
         elif self.failures:
             level, why = DiagnosticStatus.WARN, f"{self.failures} narrow-phase failures"
+        elif self.truncated_steps:
+            level, why = DiagnosticStatus.WARN, f"{self.truncated_steps} truncated steps"
+        elif self.disagreements:
+            level, why = DiagnosticStatus.WARN, (f"{self.disagreements} MPR / GJK-EPA "
+                                                 f"disagreements")
         elif sum(self.dropped.values()):
             level, why = DiagnosticStatus.WARN, "input dropped: " + ", ".join(
                 f"{k} {v}" for k, v in sorted(self.dropped.items()))
@@ -547,6 +611,9 @@ class CollisionNode(Node):
             "touching pairs": len(res.pairs) if res else 0,
             "contacts": len(res.contact_id) if res else 0,
             "narrow-phase failures": self.failures, "step errors": self.step_errors,
+            "truncated steps": self.truncated_steps,
+            "cross-checked pairs": self.cross_checked,
+            "cross-check disagreements": self.disagreements,
         }
         values.update({f"dropped: {k}": v for k, v in sorted(self.dropped.items())})
         return DiagnosticStatus(

@@ -60,8 +60,9 @@ import numpy as np
 
 from .arbiters import ArbiterSet, Events
 from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world_aabbs
-from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_NORMAL, OUT_PA,
-                                OUT_PB, OUT_SIZE, ST_FAILED, ST_SEPARATED, ST_TOUCHING)
+from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_METHOD, OUT_NORMAL,
+                                OUT_PA, OUT_PB, OUT_SIZE, ST_FAILED, ST_NOT_RUN,
+                                ST_SEPARATED, ST_TOUCHING)
 from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
 from .kernels.narrowphase import collide_batch
 from .results import ContactSet
@@ -116,6 +117,10 @@ class PipelineConfig:
     max_contacts    >= 1 contacts per pair (deepest plus largest area)
     stale_steps     >= 1: steps a touching pair survives without the narrow phase
                     confirming it (failed / not run) before it ends
+    max_pairs       >= 0: narrow-phase pairs per step, 0 for no cap; beyond it the
+                    step runs the first max_pairs pairs (in key order), the rest are
+                    NOT_RUN (their arbiters live on for stale_steps) and
+                    ``StepResult.n_truncated_pairs`` counts them
     """
     method: str = "auto"
     contact_margin: float = 0.001
@@ -124,6 +129,7 @@ class PipelineConfig:
     drift_threshold: float = 0.01
     max_contacts: int = 4
     stale_steps: int = 3
+    max_pairs: int = 0
 
     @classmethod
     def from_dict(cls, d):
@@ -156,11 +162,11 @@ class PipelineConfig:
             if not _number_ok(v, 0.0, strict):
                 raise ValueError(f"pipeline config: {name} must be a finite number "
                                  f"{'>' if strict else '>='} 0 (m), got {v!r}")
-        for name in ("max_contacts", "stale_steps"):
+        for name, lo in (("max_contacts", 1), ("stale_steps", 1), ("max_pairs", 0)):
             v = getattr(self, name)
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
-                    or v < 1:
-                raise ValueError(f"pipeline config: {name} must be an integer >= 1, "
+                    or v < lo:
+                raise ValueError(f"pipeline config: {name} must be an integer >= {lo}, "
                                  f"got {v!r}")
 
 
@@ -205,7 +211,8 @@ class StepResult(ContactSet):
     timings dict phase -> seconds; n_candidate_pairs: broad-phase pairs before the
     filter; n_narrowphase_pairs: pairs after the filter; n_failed_pairs: pairs whose
     narrow phase failed (status FAILED: an iteration cap, a degenerate input or a
-    non-finite result); their arbiters live on for ``stale_steps``
+    non-finite result); their arbiters live on for ``stale_steps``; failed_pairs
+    int64 (F, 2) those pairs; n_truncated_pairs: pairs not run for ``max_pairs``
     """
     stamp: float
     pairs: np.ndarray
@@ -215,6 +222,8 @@ class StepResult(ContactSet):
     n_candidate_pairs: int
     n_narrowphase_pairs: int
     n_failed_pairs: int
+    failed_pairs: np.ndarray
+    n_truncated_pairs: int
 
 
 class Bounds(NamedTuple):
@@ -433,6 +442,19 @@ class Pipeline:
         npairs = len(pairs)
         out = self._buffer("out", (npairs, OUT_SIZE))[:npairs]
         status = self._buffer("status", (npairs,), np.int64)[:npairs]
+        cap = self.config.max_pairs
+        if cap and npairs > cap:
+            # the pairs past the cap are not run this step (finite rows, NOT_RUN)
+            out[cap:] = 0.0
+            out[cap:, OUT_METHOD] = M_AUTO
+            status[cap:] = ST_NOT_RUN
+            self._run_narrow_phase(t, pairs[:cap], pos, quat, out[:cap], status[:cap])
+        else:
+            self._run_narrow_phase(t, pairs, pos, quat, out, status)
+        return NarrowPhase(pairs, out, status)
+
+    def _run_narrow_phase(self, t, pairs, pos, quat, out, status):
+        npairs = len(pairs)
         reach = self._reach()
         par = self.parallel_min_items
         if self._method == M_AUTO:
@@ -454,7 +476,6 @@ class Pipeline:
                                       reach, o, s)
                     out[idx] = o
                     status[idx] = s
-        return NarrowPhase(pairs, out, status)
 
     def _classify(self, narrow):
         pairs, out, status = narrow
@@ -499,6 +520,7 @@ class Pipeline:
 
     def _result(self, names, stamp, narrow, classified, events, timings, n_candidates):
         con = self.arbiters.contacts()
+        failed = narrow.pairs[narrow.status == ST_FAILED]
         rows = classified.proximity_rows
         o = narrow.out[rows]
         proximity = ProximitySet(
@@ -514,7 +536,9 @@ class Pipeline:
             method=con["method"], status=con["status"], proximity=proximity,
             events=events, timings=timings, n_candidate_pairs=int(n_candidates),
             n_narrowphase_pairs=int(len(narrow.pairs)),
-            n_failed_pairs=int(np.count_nonzero(classified.undecided_status == ST_FAILED)))
+            n_failed_pairs=len(failed), failed_pairs=failed,
+            n_truncated_pairs=max(0, len(narrow.pairs) - self.config.max_pairs)
+            if self.config.max_pairs else 0)
 
     def warm_up(self):
         """Compile (or load from the on-disk cache) every kernel on a tiny scene, so the

@@ -325,3 +325,39 @@ def test_edit_scene_service_events_proximity_and_scene_readback():
         assert list(got[-1].allowed_pairs) == ["a", "tet"]
     finally:
         p.close()
+
+
+def test_failed_pairs_are_published_with_their_status_and_a_repro():
+    from mkcollision_ros.node import NO_ID
+    p = Probe()
+    try:
+        logged = []
+        p.node.get_logger().error = lambda text, **kw: logged.append(text)
+        real = p.node.pipeline.step
+
+        def failing_step(**kw):          # the narrow phase fails on (a, far)
+            res = real(**kw)
+            res.failed_pairs = np.array([[0, 2]], np.int64)
+            res.n_failed_pairs = 1
+            return res
+        p.node.pipeline.step = failing_step
+        m = p.send(p.msg(gap=-0.1))
+        rows = list(zip(m.body_a, m.body_b, m.statuses, m.ids))
+        assert ("a", "b", 2, 0) in rows and ("a", "far", 3, NO_ID) in rows
+        assert all(math.isfinite(v) for v in m.positions)
+        assert any("narrow phase failed on a-far; repro: collide(" in t for t in logged)
+        assert p.node.failures == 1
+    finally:
+        p.close()
+
+
+def test_cross_check_counts_pairs_and_disagreements():
+    from mkcollision_ros.crosscheck import cross_check
+    p = Probe(cross_check=True, cross_check_depth_tol=0.0, cross_check_angle_tol=0.0)
+    try:
+        p.send(p.msg(gap=-0.1))
+        n, found = cross_check(p.node.scene, p.node.last.pairs, 0.0, 0.0)
+        assert p.node.cross_checked == n == 1
+        assert p.node.disagreements == len(found)
+    finally:
+        p.close()

@@ -389,3 +389,23 @@ def test_flat_rests_keep_their_contacts_under_pose_noise(rest):
             continue
         np.testing.assert_array_equal(r.contact_id[order], first[0])
         assert np.abs(r.point_a[order] - first[1]).max() <= 1e-8
+
+
+def test_max_pairs_truncates_a_step_and_keeps_the_arbiters_a_while():
+    bodies = [ball(f"b{i}") for i in range(6)]
+    pos = np.zeros((6, 3))
+    pos[:, 0] = 0.1 * np.arange(6)                 # every pair overlaps: 15 pairs
+    quat = np.tile(ID, (6, 1))
+    p = Pipeline(bodies, PipelineConfig(stale_steps=2))
+    full = p.step(pos, quat)
+    assert len(full.pairs) == 15 and full.n_truncated_pairs == 0
+    p.configure(max_pairs=4)
+    r = p.step(pos, quat)
+    assert r.n_truncated_pairs == 11 and r.n_narrowphase_pairs == 15
+    assert len(r.pairs) == 15                      # the rest kept, unconfirmed
+    run = {tuple(x) for x in full.pairs[:4].tolist()}
+    assert set(r.status[[tuple(x) in run for x in zip(r.body_a, r.body_b)]]) <= {1, 2}
+    r = p.step(pos, quat)
+    assert [tuple(x) for x in r.pairs] == [tuple(x) for x in full.pairs[:4]]
+    with pytest.raises(ValueError, match="max_pairs"):
+        p.configure(max_pairs=-1)

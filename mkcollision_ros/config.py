@@ -15,7 +15,9 @@ Per body: the shape keys of ``mkcollision_ros.shapes`` (``points`` may be given 
 [x, y, z] / ``orientation`` [x, y, z, w] (default: origin, identity; static bodies keep
 it until a pose message moves them).  ROS flattens the nesting into dotted
 names (``bodies.ball.radius``); ``bodies_from_flat`` reads that form, so the node and
-plain Python read the same file the same way.
+plain Python read the same file the same way.  ``pose_topic`` (a
+geometry_msgs/PoseStamped topic that moves that body, as motion-capture drivers publish
+one topic per rigid body) is read by ``pose_topics_from_params``.
 """
 import os
 
@@ -23,7 +25,7 @@ import yaml
 
 from .scene import validate_body
 
-BODY_KEYS = {"static", "group", "mask", "position", "orientation"}
+BODY_KEYS = {"static", "group", "mask", "position", "orientation", "pose_topic"}
 SHAPE_KEYS = {"type", "radius", "radii", "size", "length", "height", "points", "mesh",
               "normal", "offset", "margin"}
 
@@ -108,6 +110,18 @@ def load_params_file(path, node_name="collision_node"):
     if not params:
         raise ValueError(f"{path}: no ros__parameters for node '{node_name}'")
     return params
+
+
+def pose_topics_from_params(params):
+    """``{body name: PoseStamped topic}`` of the bodies given a ``pose_topic``."""
+    out = {}
+    for key, value in params.items():
+        parts = key.split(".")
+        if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "pose_topic":
+            if not isinstance(value, str) or not value:
+                raise ValueError(f"{key} must be a topic name, got {value!r}")
+            out[parts[1]] = value
+    return out
 
 
 def bodies_from_params(params, base_dir=None):

@@ -4,6 +4,7 @@
 Topics (names are parameters, relative to the node's namespace):
   in   ``body_poses``       mkcollision_msgs/BodyPoseArray   poses by body name
   in   ``pose_array``       geometry_msgs/PoseArray          poses in configured body order
+  in   ``bodies.<name>.pose_topic``  geometry_msgs/PoseStamped  one body's pose (optional)
   out  ``contacts``         mkcollision_msgs/ContactArray    every step's contacts
   out  ``contact_markers``  visualization_msgs/MarkerArray   points + normal arrows
   out  ``contact_events``   mkcollision_msgs/ContactEvents   pairs and contacts that
@@ -54,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import PoseArray
+from geometry_msgs.msg import PoseArray, PoseStamped
 from mkcollision_msgs.msg import (BodyPoseArray, ContactArray, ContactEvents,
                                   ProximityArray)
 from mkcollision_msgs.msg import Scene as SceneMsg
@@ -70,7 +71,7 @@ from visualization_msgs.msg import MarkerArray
 import msg_adapters
 
 from .arbiters import EV_PERSISTED
-from .config import bodies_from_params
+from .config import bodies_from_params, pose_topics_from_params
 from .crosscheck import cross_check, describe, repro
 from .kernels import constants as C
 from .pipeline import PIPELINE_METHODS, Pipeline, PipelineConfig
@@ -278,6 +279,11 @@ class CollisionNode(Node):
             BodyPoseArray, self.cfg["pose_topic"], self._on_body_poses, depth1)
         self.sub_array = self.create_subscription(
             PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, depth1)
+        self.sub_stamped = [
+            self.create_subscription(PoseStamped, topic,
+                                     lambda msg, name=name: self._on_pose_stamped(msg, name),
+                                     depth1)
+            for name, topic in pose_topics_from_params(self._body_params()).items()]
         self.pub_contacts = self.create_publisher(ContactArray, self.cfg["contacts_topic"], 10)
         self.pub_markers = self.create_publisher(MarkerArray, self.cfg["markers_topic"], 10)
         self.pub_events = self.create_publisher(ContactEvents, self.cfg["events_topic"],
@@ -356,6 +362,9 @@ class CollisionNode(Node):
                     return SetParametersResult(successful=False, reason=(
                         "bodies.names cannot change while running: a body's keys "
                         "(bodies.<name>.<key>) can"))
+            elif prm.name.endswith(".pose_topic"):
+                return SetParametersResult(successful=False, reason=(
+                    f"{prm.name} is fixed at start (its subscription)"))
             elif prm.name.startswith("bodies."):
                 bodies[prm.name] = prm.value
             elif prm.name not in ROS_PARAMETERS:
@@ -440,6 +449,17 @@ class CollisionNode(Node):
             return
         pos, quat = msg_adapters.pose_array_to_arrays(msg)
         self._ingest(msg.header.stamp, self.order, pos, quat, "PoseArray")
+
+    def _on_pose_stamped(self, msg, name):
+        if name not in self.scene:
+            self._warn("unknown name", f"dropped a PoseStamped of '{name}': no such body")
+            return
+        if not self._message_ok(msg.header, 1, "PoseStamped"):
+            return
+        p, q = msg.pose.position, msg.pose.orientation
+        self._ingest(msg.header.stamp, np.array([self.scene.index[name]], np.int64),
+                     np.array([[p.x, p.y, p.z]]), np.array([[q.x, q.y, q.z, q.w]]),
+                     "PoseStamped")
 
     def _message_ok(self, header, n_entries, kind):
         """The whole-message checks: frame, stamp, size."""

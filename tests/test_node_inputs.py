@@ -361,3 +361,22 @@ def test_cross_check_counts_pairs_and_disagreements():
         assert p.node.disagreements == len(found)
     finally:
         p.close()
+
+
+def test_per_body_pose_stamped_topics():
+    from geometry_msgs.msg import PoseStamped
+    p = Probe(**{"bodies.b.pose_topic": "/mocap/b/pose"})
+    try:
+        p.send(p.msg(gap=0.5))                                   # apart
+        pub = p.probe.create_publisher(PoseStamped, "/mocap/b/pose", p.best_effort)
+        msg = PoseStamped()
+        msg.header.frame_id = "world"
+        msg.header.stamp = Time(sec=900)
+        msg.pose.position.x, msg.pose.orientation.w = 0.9, 1.0
+        got = lambda: any(m.header.stamp.sec == 900 for m in p.contacts)  # noqa: E731
+        assert p.h.spin_until(got, 20.0, step=lambda: pub.publish(msg))
+        m = next(m for m in p.contacts if m.header.stamp.sec == 900)
+        assert list(zip(m.body_a, m.body_b)) == [("a", "b")]
+        assert m.depths[0] == pytest.approx(0.1, abs=1e-9)
+    finally:
+        p.close()

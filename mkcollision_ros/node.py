@@ -144,7 +144,10 @@ PARAMETERS = (
     Param("stale_steps", 3, "steps an unconfirmed pair is kept", 1, 1000),
     Param("publish_markers", True, "publish the MarkerArray"),
     Param("marker_normal_length", 0.2, "m; length of the normal arrows", 0.0, 1000.0),
-    Param("max_marker_arrows", 500, "cap on normal arrows per MarkerArray", 0, 1000000),
+    Param("marker_rate_hz", 10.0, "Hz; MarkerArrays per second at most (bodies, contact "
+          "points, normals)", 0.1, 1000.0),
+    Param("marker_deep_depth", 0.01, "m; a body with a contact deeper than this is drawn "
+          "red (touching: orange, free: grey)", 0.0, 1000.0),
     Param("warn_throttle_s", 2.0, "s; least interval between two warnings of one reason",
           0.0, 3600.0),
     Param("max_abs_coordinate", 1.0e6, "m; a pose with a coordinate beyond this is dropped",
@@ -269,6 +272,8 @@ class CollisionNode(Node):
         self.last = None                           # the last StepResult
         self._warned_at = {}
         self._warned_names = set()
+        self.painter = msg_adapters.MarkerPainter()
+        self._markers_at = -math.inf
         self._diag_steps = 0
         self._diag_t = time.monotonic()
 
@@ -580,10 +585,13 @@ class CollisionNode(Node):
         if self.cfg["proximity"] > 0.0:
             self.pub_proximity.publish(msg_adapters.proximity_to_proximity_array(
                 res.proximity, res.names, self.stamp, frame))
-        if self.cfg["publish_markers"]:
-            self.pub_markers.publish(msg_adapters.contacts_to_marker_array(
-                contacts, self.stamp, frame, self.cfg["marker_normal_length"],
-                self.cfg["max_marker_arrows"]))
+        now = time.monotonic()
+        if self.cfg["publish_markers"] and now - self._markers_at >= 1.0 / self.cfg[
+                "marker_rate_hz"]:
+            self._markers_at = now
+            self.pub_markers.publish(self.painter.marker_array(
+                self.scene, contacts, self.stamp, frame, self.cfg["marker_normal_length"],
+                self.cfg["marker_deep_depth"]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
 

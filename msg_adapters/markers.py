@@ -1,57 +1,234 @@
-"""Contacts -> ``visualization_msgs/MarkerArray``: one SPHERE_LIST of all contact points
-and one ARROW per contact along its normal (A -> B), capped in number, after a DELETEALL
-so arrows of contacts that ended disappear."""
+"""A scene and its contacts -> ``visualization_msgs/MarkerArray``, in namespaces a user
+can toggle in RViz:
+
+  bodies    one marker per body, id = the body's slot: spheres and ellipsoids as
+            SPHERE, boxes as CUBE, cylinders as CYLINDER, capsules, cones and convex
+            hulls as a TRIANGLE_LIST through their support points (an icosphere's
+            directions mapped by the support function), planes as a thin 20 m CUBE;
+            coloured by contact state (free grey, touching orange, deep red)
+  contacts  one SPHERE_LIST of every contact position (id 0)
+  normals   one LINE_LIST, a line per contact from its position along the normal, of
+            length ``normal_length`` + depth (id 0)
+
+Ids are stable: a body keeps its marker while it is in the scene and a removed body's
+marker is deleted; the contact and normal markers are replaced each time (and deleted
+when there is no contact), so nothing stale is left.  Body markers are built once per
+shape and only their pose and colour change from one call to the next.
+"""
+import math
+
+import numpy as np
 from geometry_msgs.msg import Point
+from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-NAMESPACE = "mkcollision_contacts"
+FREE = ColorRGBA(r=0.6, g=0.6, b=0.6, a=0.5)
+TOUCHING = ColorRGBA(r=1.0, g=0.6, b=0.0, a=0.7)
+DEEP = ColorRGBA(r=1.0, g=0.0, b=0.0, a=0.8)
+CONTACT = ColorRGBA(r=0.1, g=0.3, b=1.0, a=1.0)
+NORMAL = ColorRGBA(r=0.0, g=0.8, b=0.2, a=1.0)
+PLANE_SIZE = 20.0       # m, the side of a plane's patch
+PLANE_THICKNESS = 0.002
 
 
-def _pt(v):
-    p = Point()
-    p.x, p.y, p.z = float(v[0]), float(v[1]), float(v[2])
-    return p
+def _icosphere(levels=1):
+    """Unit vertices (V, 3) and triangles (F, 3) of a subdivided icosahedron."""
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    v = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]]
+    f = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+         [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+         [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+    v = [np.array(x, float) / np.linalg.norm(x) for x in v]
+    for _ in range(levels):
+        mid, nf = {}, []
+
+        def middle(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                m = v[a] + v[b]
+                v.append(m / np.linalg.norm(m))
+                mid[key] = len(v) - 1
+            return mid[key]
+        for a, b, c in f:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            nf += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        f = nf
+    return np.array(v), np.array(f)
+
+
+DIRS, TRIS = _icosphere(1)
+
+
+def support_points(shape, verts, dirs=DIRS):
+    """Support points (D, 3), body frame, of a capsule, cone or convex ``shape`` dict
+    along unit directions ``dirs`` (D, 3); ``verts`` (M, 3): a hull's stored points."""
+    kind, u = shape["type"], dirs
+    if kind == "capsule":
+        h = 0.5 * float(shape["length"])
+        p = float(shape["radius"]) * u + np.outer(np.where(u[:, 2] >= 0, h, -h), [0, 0, 1])
+    elif kind == "cone":
+        r, h = float(shape["radius"]), 0.5 * float(shape["height"])
+        s = np.linalg.norm(u[:, :2], axis=1)
+        rim = np.zeros_like(u)
+        rim[:, :2] = r * u[:, :2] / np.where(s > 0, s, 1.0)[:, None]
+        rim[:, 2] = -h
+        tip = np.array([0.0, 0.0, h])
+        p = np.where((np.sum(rim * u, axis=1) >= u @ tip)[:, None], rim, tip)
+    else:
+        p = verts[np.argmax(u @ verts.T, axis=1)]
+    return p + float(shape.get("margin", 0.0)) * u
+
+
+def _points(rows):
+    return [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in rows]
+
+
+class MarkerPainter:
+    """Keeps the body markers of a scene and builds each MarkerArray from them."""
+
+    def __init__(self):
+        self._bodies = {}          # slot -> (Body, Marker)
+
+    def _body_marker(self, scene, slot, body):
+        shape, m = body.shape, Marker()
+        m.ns, m.id, m.action = "bodies", int(slot), Marker.ADD
+        m.pose.orientation.w = 1.0
+        grow = 2.0 * float(shape.get("margin", 0.0))
+        kind = shape["type"]
+        if kind in ("sphere", "ellipsoid"):
+            m.type = Marker.SPHERE
+            d = (2.0 * np.asarray(shape["radii"], float) if kind == "ellipsoid"
+                 else np.full(3, 2.0 * float(shape["radius"]))) + grow
+            m.scale.x, m.scale.y, m.scale.z = (float(x) for x in d)
+        elif kind == "box":
+            m.type = Marker.CUBE
+            m.scale.x, m.scale.y, m.scale.z = (float(x) + grow for x in shape["size"])
+        elif kind == "cylinder" and not grow:
+            m.type = Marker.CYLINDER
+            m.scale.x = m.scale.y = 2.0 * float(shape["radius"])
+            m.scale.z = float(shape["height"])
+        elif kind == "plane":
+            m.type = Marker.CUBE
+            m.scale.x = m.scale.y = PLANE_SIZE
+            m.scale.z = PLANE_THICKNESS
+        else:
+            m.type = Marker.TRIANGLE_LIST
+            m.scale.x = m.scale.y = m.scale.z = 1.0
+            if kind == "cylinder":
+                shape = dict(shape, type="convex")
+                r, h = float(body.shape["radius"]), 0.5 * float(body.shape["height"])
+                a = np.linspace(0, 2 * math.pi, 24, endpoint=False)
+                ring = np.stack([r * np.cos(a), r * np.sin(a), np.zeros(24)], axis=1)
+                verts = np.concatenate([ring + [0, 0, h], ring - [0, 0, h]])
+            else:
+                first, count = scene.table.vrange[slot]
+                verts = scene.table.verts[first:first + count]
+            pts = support_points(shape, verts)
+            m.points = _points(pts[TRIS.reshape(-1)])
+        return m
+
+    def _place(self, m, body, pos, quat):
+        if body.shape["type"] == "plane":
+            n = np.asarray(body.shape["normal"], float)
+            n /= np.linalg.norm(n)
+            # the patch's centre on the plane, its z along the normal (body frame)
+            c = (float(body.shape["offset"]) / np.linalg.norm(body.shape["normal"])
+                 - 0.5 * PLANE_THICKNESS) * n
+            q_n = _quat_from_z(n)
+            q = _quat_mul(quat, q_n)
+            c = pos + _rotate(quat, c)
+        else:
+            c, q = pos, quat
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = (float(x) for x in c)
+        (m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z,
+         m.pose.orientation.w) = (float(x) for x in q)
+
+    def marker_array(self, scene, contacts, stamp=None, frame_id="world",
+                     normal_length=0.2, deep=0.01, point_size=0.04, bodies=True):
+        """The MarkerArray of ``scene``'s bodies (``bodies``) and of ``contacts`` (any
+        object with ``body_a``, ``body_b``, ``position``, ``normal``, ``depth``); a body
+        with a contact deeper than ``deep`` (m) is drawn red."""
+        out = MarkerArray()
+        if bodies:
+            depth = np.full(scene.n_slots, -1.0)
+            if len(contacts.depth):
+                np.maximum.at(depth, contacts.body_a, contacts.depth)
+                np.maximum.at(depth, contacts.body_b, contacts.depth)
+            live = {}
+            for body in scene.bodies():
+                slot = scene.index[body.name]
+                kept = self._bodies.get(slot)
+                m = kept[1] if kept is not None and kept[0] is body else \
+                    self._body_marker(scene, slot, body)
+                live[slot] = (body, m)
+                self._place(m, body, scene.positions[slot], scene.orientations[slot])
+                m.color = (FREE if depth[slot] < 0 else DEEP if depth[slot] > deep
+                           else TOUCHING)
+                m.header.frame_id = frame_id
+                if stamp is not None:
+                    m.header.stamp = stamp
+                out.markers.append(m)
+            for slot in set(self._bodies) - set(live):
+                gone = Marker(ns="bodies", id=int(slot), action=Marker.DELETE)
+                gone.header.frame_id = frame_id
+                out.markers.append(gone)
+            self._bodies = live
+        pos = np.asarray(contacts.position, float)
+        for ns, kind in (("contacts", Marker.SPHERE_LIST), ("normals", Marker.LINE_LIST)):
+            m = Marker(ns=ns, id=0, type=kind)
+            m.header.frame_id = frame_id
+            if stamp is not None:
+                m.header.stamp = stamp
+            m.pose.orientation.w = 1.0
+            if not len(pos):
+                m.action = Marker.DELETE
+                out.markers.append(m)
+                continue
+            m.action = Marker.ADD
+            if kind == Marker.SPHERE_LIST:
+                m.scale.x = m.scale.y = m.scale.z = point_size
+                m.color = CONTACT
+                m.points = _points(pos)
+            else:
+                m.scale.x = 0.2 * point_size
+                m.color = NORMAL
+                length = normal_length + np.asarray(contacts.depth, float)
+                ends = pos + np.asarray(contacts.normal, float) * length[:, None]
+                m.points = _points(np.stack([pos, ends], axis=1).reshape(-1, 3))
+            out.markers.append(m)
+        return out
+
+
+def _quat_mul(a, b):
+    x1, y1, z1, w1 = a
+    x2, y2, z2, w2 = b
+    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
+
+
+def _rotate(q, v):
+    x, y, z, w = q
+    u = np.array([x, y, z])
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def _quat_from_z(n):
+    """The unit quaternion xyzw turning +z onto the unit vector ``n``."""
+    c = float(n[2])
+    if c < -1.0 + 1e-12:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    axis = np.cross([0.0, 0.0, 1.0], n)
+    q = np.array([axis[0], axis[1], axis[2], 1.0 + c])
+    return q / np.linalg.norm(q)
 
 
 def contacts_to_marker_array(contacts, stamp=None, frame_id="world", normal_length=0.2,
-                             max_arrows=500, point_size=0.04):
-    """Contacts (see ``contacts.py``) -> ``MarkerArray``.
-
-    Marker 0 (DELETEALL) clears the namespace, marker 1 is the SPHERE_LIST of contact
-    positions, markers 2.. are arrows from each contact position along the normal
-    (``normal_length`` metres), at most ``max_arrows``.
-    """
-    out = MarkerArray()
-    clear = Marker()
-    clear.action = Marker.DELETEALL
-    clear.ns = NAMESPACE
-    out.markers.append(clear)
-
-    def base(marker_id, kind):
-        m = Marker()
-        if stamp is not None:
-            m.header.stamp = stamp
-        m.header.frame_id = frame_id
-        m.ns = NAMESPACE
-        m.id = marker_id
-        m.type = kind
-        m.action = Marker.ADD
-        m.pose.orientation.w = 1.0
-        m.color.a = 1.0
-        return m
-
-    points = base(1, Marker.SPHERE_LIST)
-    points.scale.x = points.scale.y = points.scale.z = point_size
-    points.color.r, points.color.g, points.color.b = 1.0, 0.2, 0.1
-    points.points = [_pt(p) for p in contacts.position]
-    out.markers.append(points)
-    for k in range(min(len(contacts.depth), max_arrows)):
-        arrow = base(2 + k, Marker.ARROW)
-        p = contacts.position[k]
-        arrow.points = [_pt(p), _pt(p + normal_length * contacts.normal[k])]
-        arrow.scale.x = 0.2 * point_size   # shaft diameter
-        arrow.scale.y = 0.5 * point_size   # head diameter
-        arrow.scale.z = 0.0                # default head length
-        arrow.color.r, arrow.color.g, arrow.color.b = 0.1, 0.6, 1.0
-        out.markers.append(arrow)
-    return out
+                             point_size=0.04):
+    """Contacts alone (no scene) -> the ``contacts`` and ``normals`` markers."""
+    class _NoBodies:
+        n_slots = 0
+    return MarkerPainter().marker_array(_NoBodies(), contacts, stamp, frame_id,
+                                        normal_length, point_size=point_size, bodies=False)

@@ -1,4 +1,6 @@
 """msg_adapters: struct-of-arrays layouts, zero-copy reads, round trips, length checks."""
+import math
+
 import numpy as np
 import pytest
 from ros_harness import RosHarness  # noqa: F401,I001  (sets ROS_DOMAIN_ID before rclpy)
@@ -70,14 +72,57 @@ def test_contact_array_and_contact_list_carry_every_field():
         assert x.status == x.STATUS_PENETRATING and x.method == x.METHOD_GJK_EPA
 
 
-def test_markers_points_arrows_and_cap():
+def test_markers_points_and_normals_batched():
     c = contacts(10)
-    out = msg_adapters.contacts_to_marker_array(c, normal_length=0.5, max_arrows=4).markers
-    assert out[0].action == out[0].DELETEALL
-    assert out[1].type == out[1].SPHERE_LIST and len(out[1].points) == 10
-    arrows = out[2:]
-    assert len(arrows) == 4 and all(m.type == m.ARROW for m in arrows)
-    tip = arrows[0].points[1]
-    expected = c.position[0] + 0.5 * c.normal[0]
+    out = msg_adapters.contacts_to_marker_array(c, normal_length=0.5).markers
+    points, normals = out
+    assert (points.ns, points.type, len(points.points)) == ("contacts", points.SPHERE_LIST, 10)
+    assert (normals.ns, normals.type, len(normals.points)) == ("normals", normals.LINE_LIST, 20)
+    tip = normals.points[1]
+    expected = c.position[0] + (0.5 + c.depth[0]) * c.normal[0]
     assert (tip.x, tip.y, tip.z) == pytest.approx(tuple(expected))
-    assert len({m.id for m in out[1:]}) == len(out) - 1
+    empty = msg_adapters.contacts_to_marker_array(contacts(0)).markers
+    assert [m.action for m in empty] == [empty[0].DELETE] * 2       # nothing stale
+
+
+def test_body_markers_follow_the_scene_with_stable_ids():
+    from mkcollision_ros.scene import Scene
+    from msg_adapters.markers import MarkerPainter
+    sc = Scene([{"name": n, "shape": s, "pose": ([float(i), 0.0, 0.0], [0, 0, 0, 1])}
+                for i, (n, s) in enumerate([
+                    ("ball", {"type": "sphere", "radius": 0.5}),
+                    ("egg", {"type": "ellipsoid", "radii": [0.3, 0.2, 0.1]}),
+                    ("crate", {"type": "box", "size": [1.0, 2.0, 3.0]}),
+                    ("can", {"type": "cylinder", "radius": 0.2, "height": 1.0}),
+                    ("pill", {"type": "capsule", "radius": 0.1, "length": 0.5}),
+                    ("cone", {"type": "cone", "radius": 0.3, "height": 0.6}),
+                    ("tet", {"type": "convex", "points": [[0, 0, 0], [1, 0, 0], [0, 1, 0],
+                                                           [0, 0, 1]]}),
+                    ("floor", {"type": "plane", "normal": [0, 0, 1], "offset": 0.0})])])
+    painter = MarkerPainter()
+    c = contacts(0)
+    c.names = sc.names
+    out = painter.marker_array(sc, c).markers
+    body = {m.id: m for m in out if m.ns == "bodies"}
+    assert sorted(body) == list(range(8))
+    kinds = [body[i].type for i in range(8)]
+    M = out[0]
+    assert kinds == [M.SPHERE, M.SPHERE, M.CUBE, M.CYLINDER, M.TRIANGLE_LIST,
+                     M.TRIANGLE_LIST, M.TRIANGLE_LIST, M.CUBE]
+    assert (body[1].scale.x, body[1].scale.y, body[1].scale.z) == (0.6, 0.4, 0.2)
+    assert body[2].pose.position.x == 2.0
+    # the hull's triangles lie on the hull: every point is one of its vertices
+    pts = {(p.x, p.y, p.z) for p in body[6].points}
+    assert pts <= {(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)}
+    # the capsule's points are on its surface
+    for p in body[4].points:
+        z = min(max(p.z, -0.25), 0.25)
+        assert math.hypot(p.x, p.y, p.z - z) == pytest.approx(0.1, abs=1e-12)
+    # the plane's patch: its top face on z = 0
+    assert body[7].pose.position.z == pytest.approx(-0.001) and body[7].scale.x == 20.0
+    # a removed body's marker is deleted, the others keep their ids and objects
+    sc.remove_body("egg")
+    again = painter.marker_array(sc, c).markers
+    gone = [m for m in again if m.ns == "bodies" and m.action == m.DELETE]
+    assert [m.id for m in gone] == [1]
+    assert {m.id for m in again if m.ns == "bodies" and m.action == m.ADD} == set(body) - {1}

@@ -116,11 +116,13 @@ def test_contact_id_persists_and_markers_follow(ros):
         ids.append(set(c["contact_id"].tolist()))
     assert all(s == ids[0] for s in ids), ids
     assert h.spin_until(lambda: len(got["markers"]) > 0, timeout=10.0)
-    markers = got["markers"][-1].markers
-    kinds = [m.type for m in markers]
-    assert markers[0].action == markers[0].DELETEALL
-    assert markers[1].type == markers[1].SPHERE_LIST and len(markers[1].points) >= 1
-    assert markers[1].ARROW in kinds
+    markers = {(m.ns, m.id): m for m in got["markers"][-1].markers}
+    assert markers[("contacts", 0)].type == markers[("contacts", 0)].SPHERE_LIST
+    assert len(markers[("contacts", 0)].points) >= 1
+    assert len(markers[("normals", 0)].points) == 2 * len(markers[("contacts", 0)].points)
+    a, b = markers[("bodies", 0)], markers[("bodies", 1)]       # 6 cm deep: red
+    assert (a.color.r, a.color.g) == (1.0, 0.0) and (b.color.r, b.color.g) == (1.0, 0.0)
+    assert markers[("bodies", 2)].color.r == pytest.approx(0.6)   # the egg, far: grey
 
 
 def test_sphere_against_ellipsoid_along_its_long_axis(ros):

@@ -144,8 +144,10 @@ PARAMETERS = (
     Param("stale_steps", 3, "steps an unconfirmed pair is kept", 1, 1000),
     Param("publish_markers", True, "publish the MarkerArray"),
     Param("marker_normal_length", 0.2, "m; length of the normal arrows", 0.0, 1000.0),
-    Param("marker_rate_hz", 10.0, "Hz; MarkerArrays per second at most (bodies, contact "
+    Param("marker_rate_hz", 5.0, "Hz; MarkerArrays per second at most (bodies, contact "
           "points, normals)", 0.1, 1000.0),
+    Param("marker_bodies", True, "draw the bodies in the MarkerArray (at 1,000 bodies "
+          "~50 ms to serialise a MarkerArray)"),
     Param("marker_deep_depth", 0.01, "m; a body with a contact deeper than this is drawn "
           "red (touching: orange, free: grey)", 0.0, 1000.0),
     Param("warn_throttle_s", 2.0, "s; least interval between two warnings of one reason",
@@ -188,7 +190,6 @@ PARAMETERS = (
 PARAMS = {p.name: p for p in PARAMETERS}
 # parameters every rclpy node may be given, which the node leaves to rclpy
 ROS_PARAMETERS = ("use_sim_time", "start_type_description_service")
-METHODS = {"auto": C.M_AUTO, "gjk_epa": C.M_GJK_EPA, "mpr": C.M_MPR}
 LATENCY_WINDOW = 1000      # steps in the latency percentiles
 
 
@@ -565,7 +566,7 @@ class CollisionNode(Node):
                 self.get_logger().error(
                     f"narrow phase failed on {res.names[a]}-{res.names[b]}; repro: "
                     f"{repro(self.scene, a, b, self.cfg['method'])}")
-            contacts = _with_failed_pairs(contacts, self.scene, METHODS[self.cfg["method"]])
+            contacts = _with_failed_pairs(contacts, self.scene, C.METHOD_NAMES.index(self.cfg["method"]))
         if self.cfg["cross_check"]:
             self._cross_check(res.pairs)
         finite = (np.isfinite(contacts.position).all(axis=1)
@@ -591,7 +592,7 @@ class CollisionNode(Node):
             self._markers_at = now
             self.pub_markers.publish(self.painter.marker_array(
                 self.scene, contacts, self.stamp, frame, self.cfg["marker_normal_length"],
-                self.cfg["marker_deep_depth"]))
+                self.cfg["marker_deep_depth"], bodies=self.cfg["marker_bodies"]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
 
@@ -722,7 +723,7 @@ class CollisionNode(Node):
         missing = [n for n, i in zip(names, idx) if not posed[i]]
         idx = idx[posed[idx]]
         contacts = query_contacts(sc.table, sc.names, idx, pos, quat, sc.static,
-                                  METHODS[self.cfg["method"]])
+                                  C.METHOD_NAMES.index(self.cfg["method"]))
         return contacts, missing
 
 

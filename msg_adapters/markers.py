@@ -3,8 +3,8 @@ can toggle in RViz:
 
   bodies    one marker per body, id = the body's slot: spheres and ellipsoids as
             SPHERE, boxes as CUBE, cylinders as CYLINDER, capsules, cones and convex
-            hulls as a TRIANGLE_LIST through their support points (an icosphere's
-            directions mapped by the support function), planes as a thin 20 m CUBE;
+            hulls as a TRIANGLE_LIST through their support points (an icosahedron's
+            directions mapped by the support function: a coarse picture), planes as a thin 20 m CUBE;
             coloured by contact state (free grey, touching orange, deep red)
   contacts  one SPHERE_LIST of every contact position (id 0)
   normals   one LINE_LIST, a line per contact from its position along the normal, of
@@ -57,7 +57,10 @@ def _icosphere(levels=1):
     return np.array(v), np.array(f)
 
 
-DIRS, TRIS = _icosphere(1)
+# 12 directions and 20 triangles a mesh: 60 points, so a MarkerArray of 1,000 bodies
+# stays near a megabyte (the next level, 240 points a mesh, was 2.7 MB and 130 ms to
+# serialise in rclpy)
+DIRS, TRIS = _icosphere(0)
 
 
 def support_points(shape, verts, dirs=DIRS):

@@ -5,6 +5,8 @@ Importing this module pins ROS_DOMAIN_ID to a value derived from the process id 
 set), so parallel runs on one machine do not hear each other.
 """
 import os
+import signal
+import subprocess
 import time
 
 os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 90))
@@ -50,3 +52,35 @@ class RosHarness:
         for n in self.nodes:
             n.destroy_node()
         rclpy.try_shutdown(context=self.context)
+
+
+def start_node(params_file, *ros_args):
+    """The installed collision_node, as ``ros2 run`` starts it, output captured; it dies
+    with the test process (demo.die_with_parent)."""
+    from mkcollision_ros.demo import die_with_parent, node_executable
+    return subprocess.Popen([node_executable(), "--ros-args", "--params-file", params_file,
+                             *ros_args],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            start_new_session=True, preexec_fn=die_with_parent)
+
+
+def stop(proc):
+    """SIGINT the node's process group (SIGKILL after 20 s); return its output."""
+    if proc.poll() is None:
+        os.killpg(proc.pid, signal.SIGINT)
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.stdout.read()
+
+
+def run_to_exit(params_file, timeout=240):
+    """Start the node and wait for it to exit by itself: (return code, output)."""
+    proc = start_node(params_file)
+    try:
+        proc.wait(timeout=timeout)
+    finally:
+        log = stop(proc)
+    return proc.returncode, log

@@ -1,13 +1,9 @@
 """Bad input through real DDS to the installed executable, started as a user would:
 after each bad item the node still answers a good pose message with finite contacts,
 and /diagnostics counts the item under its reason."""
-import os
-import signal
-import subprocess
-
 import numpy as np
 import pytest
-from ros_harness import RosHarness  # noqa: I001  (sets ROS_DOMAIN_ID before rclpy)
+from ros_harness import RosHarness, start_node, stop  # noqa: I001  (sets ROS_DOMAIN_ID)
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray
@@ -19,7 +15,6 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 import msg_adapters
 from mkcollision_msgs.msg import Body
-from mkcollision_ros.demo import die_with_parent, node_executable
 
 PARAMS = """/**:
   ros__parameters:
@@ -40,9 +35,7 @@ GOOD = [[0.0, 0, 0], [0.9, 0, 0], [20.0, 0, 0]]
 def live(tmp_path_factory):
     path = tmp_path_factory.mktemp("bad") / "params.yaml"
     path.write_text(PARAMS)
-    proc = subprocess.Popen([node_executable(), "--ros-args", "--params-file", str(path)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            start_new_session=True, preexec_fn=die_with_parent)
+    proc = start_node(str(path))
     h = RosHarness()
     probe = h.node("probe")
     got, diag = [], []
@@ -88,14 +81,8 @@ def live(tmp_path_factory):
     assert good(), "the node never answered"
     yield h, probe, pub, msg, good, bad, dropped, state
     h.close()
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    assert proc.returncode == 0, proc.stdout.read()
+    log = stop(proc)
+    assert proc.returncode == 0, log
 
 
 BAD_POSES = [

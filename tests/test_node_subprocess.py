@@ -8,32 +8,14 @@ import time
 
 import numpy as np
 import pytest
-from ros_harness import RosHarness  # noqa: I001  (sets ROS_DOMAIN_ID before rclpy)
+from ros_harness import RosHarness, run_to_exit, start_node, stop  # noqa: I001
 
 from builtin_interfaces.msg import Time
 from mkcollision_msgs.msg import BodyPoseArray, ContactArray
 
 import msg_adapters
 from mkcollision_ros.config import bodies_from_params, load_params_file
-from mkcollision_ros.demo import default_params_file, die_with_parent, node_executable
-
-
-def start_node(params_file, *ros_args):
-    return subprocess.Popen([node_executable(), "--ros-args", "--params-file", params_file,
-                             *ros_args],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                            start_new_session=True, preexec_fn=die_with_parent)
-
-
-def stop(proc):
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-    return proc.stdout.read()
+from mkcollision_ros.demo import default_params_file, node_executable
 
 
 def test_installed_executable_and_config_are_where_ros2_run_looks():
@@ -87,32 +69,20 @@ def test_broken_config_exits_with_a_clear_message(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("collision_node:\n  ros__parameters:\n    bodies:\n"
                    "      names: [x]\n      x: {type: sphere, radius: -1.0}\n")
-    proc = start_node(str(bad))
-    try:
-        proc.wait(timeout=240)
-    finally:
-        log = stop(proc)
-    assert proc.returncode == 1, log
+    code, log = run_to_exit(str(bad))
+    assert code == 1, log
     assert "invalid configuration" in log and "'radius' must be > 0" in log, log
 
 
 def test_missing_params_file_and_typo_give_one_line(tmp_path):
-    proc = start_node(str(tmp_path / "missing.yaml"))
-    try:
-        proc.wait(timeout=60)
-    finally:
-        log = stop(proc)
-    assert proc.returncode == 1, log
+    code, log = run_to_exit(str(tmp_path / "missing.yaml"))
+    assert code == 1, log
     assert "Traceback" not in log and "cannot start" in log, log
     typo = tmp_path / "typo.yaml"
     typo.write_text("/**:\n  ros__parameters:\n    rate_hzz: 5.0\n    bodies:\n"
                     "      names: [x]\n      x: {type: sphere, radius: 1.0}\n")
-    proc = start_node(str(typo))
-    try:
-        proc.wait(timeout=240)
-    finally:
-        log = stop(proc)
-    assert proc.returncode == 1, log
+    code, log = run_to_exit(str(typo))
+    assert code == 1, log
     assert "unknown parameter 'rate_hzz'" in log and "Traceback" not in log, log
 
 

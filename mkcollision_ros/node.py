@@ -251,6 +251,12 @@ class CollisionNode(Node):
             **{k: self.cfg[k] for k in PIPELINE_SETTINGS}))
         # PoseArray poses go to the bodies in slot order: bodies.names at start
         self.order = np.flatnonzero(self.scene.used)
+        # a first status before the kernels compile (minutes on a first start)
+        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
+        self._publish_diagnostics(DiagnosticStatus(
+            level=DiagnosticStatus.WARN, name=f"{self.get_name()}: collision pipeline",
+            message="warming up: compiling or loading the kernels",
+            hardware_id=self.get_fully_qualified_name()))
         t0 = time.perf_counter()
         self.pipeline.warm_up()
         self.warm_up_s = time.perf_counter() - t0
@@ -298,7 +304,6 @@ class CollisionNode(Node):
                                                    self.cfg["proximity_topic"], 10)
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.pub_scene = self.create_publisher(SceneMsg, self.cfg["scene_topic"], latched)
-        self.pub_diag = self.create_publisher(DiagnosticArray, "/diagnostics", 10)
         self.srv_check = self.create_service(CheckCollision, "check_collision",
                                              self._on_check_collision)
         self.srv_edit = self.create_service(EditScene, "edit_scene", self._on_edit_scene)
@@ -650,10 +655,10 @@ class CollisionNode(Node):
             hardware_id=self.get_fully_qualified_name(),
             values=[KeyValue(key=k, value=str(v)) for k, v in values.items()])
 
-    def _publish_diagnostics(self):
+    def _publish_diagnostics(self, status=None):
         msg = DiagnosticArray()
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.status = [self.diagnostics()]
+        msg.status = [self.diagnostics() if status is None else status]
         self.pub_diag.publish(msg)
 
     # -- services -----------------------------------------------------------------

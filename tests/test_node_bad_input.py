@@ -150,3 +150,21 @@ def test_bad_parameter_and_bad_edit_change_nothing(live):
         remove=["far"], bodies=[Body(name="b", type="sphere", dimensions=[-1.0])]))
     assert not r.success and "radius" in r.message
     assert good(60.0)          # a and b still touch, far is still there and apart
+
+
+def test_a_truncated_step_is_reported(live):
+    h, probe, pub, msg, good, bad, dropped, state = live
+    client = probe.create_client(SetParameters, "/collision_node/set_parameters")
+    assert client.wait_for_service(timeout_sec=10.0)
+
+    def set_max_pairs(n):
+        fut = client.call_async(SetParameters.Request(
+            parameters=[Parameter("max_pairs", value=n).to_parameter_msg()]))
+        assert h.spin_until(fut.done, 10.0) and fut.result().results[0].successful
+    set_max_pairs(1)
+    state["sec"] += 1
+    crowd = msg(pos=[[0.0, 0, 0], [0.9, 0, 0], [0.0, 0.9, 0]])     # three pairs overlap
+    bad(crowd)
+    assert int(dropped()["truncated steps"]) >= 1
+    set_max_pairs(100000)
+    assert good(60.0)

@@ -45,9 +45,9 @@ costs microseconds for a few pairs and ~1 us per touching pair, with no Python l
 import numpy as np
 
 from .kernels.constants import ST_NOT_RUN
-from .scene import KEY_BASE
 from .kernels.manifold import (EV_BEGAN, EV_ENDED, EV_PERSISTED, MAX_MANIFOLD,
                                arbiter_step)
+from .scene import KEY_BASE
 
 BEGAN = "began"
 PERSISTED = "persisted"

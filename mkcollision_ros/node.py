@@ -54,6 +54,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import rclpy
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseArray, PoseStamped
 from mkcollision_msgs.msg import (BodyPoseArray, ContactArray, ContactEvents,
@@ -66,6 +67,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
 import msg_adapters
@@ -289,8 +291,9 @@ class CollisionNode(Node):
                                          else ReliabilityPolicy.BEST_EFFORT))
         self.sub_named = self.create_subscription(
             BodyPoseArray, self.cfg["pose_topic"], self._on_body_poses, depth1)
+        # PoseArray arrives as its CDR bytes, read by numpy (msg_adapters.poses)
         self.sub_array = self.create_subscription(
-            PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, depth1)
+            PoseArray, self.cfg["pose_array_topic"], self._on_pose_array, depth1, raw=True)
         self.sub_stamped = [
             self.create_subscription(PoseStamped, topic,
                                      lambda msg, name=name: self._on_pose_stamped(msg, name),
@@ -449,17 +452,22 @@ class CollisionNode(Node):
         ok = slots >= 0
         self._ingest(msg.header.stamp, slots[ok], pos[ok], quat[ok], "BodyPoseArray")
 
-    def _on_pose_array(self, msg):
+    def _on_pose_array(self, data):
+        try:
+            sec, nanosec, frame, pos, quat = msg_adapters.pose_array_from_cdr(data)
+        except ValueError as err:
+            self._warn("malformed message", f"dropped a PoseArray: {err}")
+            return
         n = len(self.order)
-        if len(msg.poses) != n:
-            self._warn("length mismatch", f"dropped a PoseArray with {len(msg.poses)} poses: "
+        if len(pos) != n:
+            self._warn("length mismatch", f"dropped a PoseArray with {len(pos)} poses: "
                        f"the node has {n} bodies, and PoseArray poses are matched to "
                        f"bodies by order")
             return
-        if not self._message_ok(msg.header, n, "PoseArray"):
+        header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id=frame)
+        if not self._message_ok(header, n, "PoseArray"):
             return
-        pos, quat = msg_adapters.pose_array_to_arrays(msg)
-        self._ingest(msg.header.stamp, self.order, pos, quat, "PoseArray")
+        self._ingest(header.stamp, self.order, pos, quat, "PoseArray")
 
     def _on_pose_stamped(self, msg, name):
         if name not in self.scene:

@@ -126,3 +126,22 @@ def test_body_markers_follow_the_scene_with_stable_ids():
     gone = [m for m in again if m.ns == "bodies" and m.action == m.DELETE]
     assert [m.id for m in gone] == [1]
     assert {m.id for m in again if m.ns == "bodies" and m.action == m.ADD} == set(body) - {1}
+
+@pytest.mark.parametrize("n, frame", [(0, "world"), (1, ""), (7, "map"), (1000, "odom_x")])
+def test_pose_array_from_cdr_equals_rclpy(n, frame):
+    from geometry_msgs.msg import PoseArray
+    from msg_adapters.poses import pose_array_from_cdr
+    rng = np.random.default_rng(n)
+    pos, quat = rng.normal(size=(n, 3)), rng.normal(size=(n, 4))
+    msg = arrays_to_pose_array(pos, quat, frame_id=frame)
+    msg.header.stamp.sec, msg.header.stamp.nanosec = 12, 345
+    data = serialize_message(msg)
+    back = deserialize_message(data, PoseArray)
+    sec, nsec, fr, p, q = pose_array_from_cdr(data)
+    assert (sec, nsec, fr) == (12, 345, frame) == (back.header.stamp.sec,
+                                                   back.header.stamp.nanosec,
+                                                   back.header.frame_id)
+    want_p, want_q = msg_adapters.pose_array_to_arrays(back)
+    assert np.array_equal(p, want_p) and np.array_equal(q, want_q)
+    with pytest.raises(ValueError):
+        pose_array_from_cdr(data[:len(data) - 8] if n else data[:10])

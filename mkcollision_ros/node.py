@@ -72,6 +72,7 @@ from visualization_msgs.msg import MarkerArray
 
 import msg_adapters
 
+from . import compile_progress
 from .arbiters import EV_PERSISTED
 from .config import bodies_from_params, pose_topics_from_params
 from .crosscheck import cross_check, describe, repro
@@ -260,7 +261,8 @@ class CollisionNode(Node):
             message="warming up: compiling or loading the kernels",
             hardware_id=self.get_fully_qualified_name()))
         t0 = time.perf_counter()
-        self.pipeline.warm_up()
+        with compile_progress.reporting(self.get_logger().info):
+            self.pipeline.warm_up()
         self.warm_up_s = time.perf_counter() - t0
         self.get_logger().info(
             f"{len(self.scene)} bodies loaded; kernels ready in {self.warm_up_s:.2f} s")

@@ -283,6 +283,8 @@ class CollisionNode(Node):
         self.last = None                           # the last StepResult
         self._warned_at = {}
         self._warned_names = set()
+        self._names_key = None            # (scene version, names) of _names_slots
+        self._names_slots = None
         self.painter = msg_adapters.MarkerPainter()
         self._markers_at = -math.inf
         self._diag_steps = 0
@@ -441,18 +443,29 @@ class CollisionNode(Node):
             return
         if not self._message_ok(msg.header, len(names), "BodyPoseArray"):
             return
-        slots = np.fromiter((self.scene.index.get(n, -1) for n in names), np.int64,
-                            len(names))
-        unknown = [n for n, s in zip(names, slots) if s < 0]
-        if unknown:
+        slots = self._slots_of(names)
+        if not (slots >= 0).all():
+            unknown = [n for n, s in zip(names, slots) if s < 0]
             self.dropped["unknown name"] += len(unknown)
             new = sorted(set(unknown) - self._warned_names)
             if new:
                 self._warned_names.update(new)
                 self.get_logger().warning(f"BodyPoseArray names unknown bodies (warned once "
                                           f"per name): {new[:20]}")
-        ok = slots >= 0
-        self._ingest(msg.header.stamp, slots[ok], pos[ok], quat[ok], "BodyPoseArray")
+            ok = slots >= 0
+            slots, pos, quat = slots[ok], pos[ok], quat[ok]
+        self._ingest(msg.header.stamp, slots, pos, quat, "BodyPoseArray")
+
+    def _slots_of(self, names):
+        """Slots of ``names`` (-1: unknown), remembered for the next message with the
+        same names in the same order (a publisher's usual case) until the scene changes."""
+        key = (self.scene.version, names)
+        if self._names_key is None or self._names_key[0] != key[0] \
+                or self._names_key[1] != names:
+            index = self.scene.index
+            slots = np.fromiter((index.get(n, -1) for n in names), np.int64, len(names))
+            self._names_key, self._names_slots = key, slots
+        return self._names_slots
 
     def _on_pose_array(self, data):
         try:

@@ -384,6 +384,10 @@ class CollisionNode(Node):
                 return SetParametersResult(successful=False, reason=(
                     f"{prm.name} is fixed at start (its subscription)"))
             elif prm.name.startswith("bodies."):
+                if prm.name.split(".")[1] not in self.scene:
+                    return SetParametersResult(successful=False, reason=(
+                        f"{prm.name}: the body is no longer in the scene (edit_scene "
+                        f"removed it)"))
                 bodies[prm.name] = prm.value
             elif prm.name not in ROS_PARAMETERS:
                 return SetParametersResult(successful=False,
@@ -413,7 +417,7 @@ class CollisionNode(Node):
             self.pipeline.configure(**settings)
         if touched:
             for body in bodies_from_params(self._body_params()):
-                if body["name"] in touched:
+                if body["name"] in touched and body["name"] in self.scene:
                     old = self.scene.body(body["name"])
                     body = dict(body)
                     body.pop("pose", None)          # a shape edit keeps the current pose

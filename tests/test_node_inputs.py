@@ -323,6 +323,10 @@ def test_edit_scene_service_events_proximity_and_scene_readback():
         crate = next(b for b in got[-1].bodies if b.name == "crate")
         assert crate.type == "box" and list(crate.dimensions) == [1.0, 1.0, 1.0]
         assert list(got[-1].allowed_pairs) == ["a", "tet"]
+        # a removed body's parameters are refused, the node lives on
+        r = p.set("bodies.b.radius", 0.4)
+        assert not r.successful and "no longer in the scene" in r.reason
+        assert p.send(p.msg(names=["a"], pos=[[0.0, 0, 0]], sec=p.sec + 50))
     finally:
         p.close()
 

@@ -146,7 +146,8 @@ PARAMETERS = (
     Param("max_contacts", 4, "contacts kept per touching pair", 1, 16),
     Param("stale_steps", 3, "steps an unconfirmed pair is kept", 1, 1000),
     Param("publish_markers", True, "publish the MarkerArray"),
-    Param("marker_normal_length", 0.2, "m; length of the normal arrows", 0.0, 1000.0),
+    Param("marker_normal_length", 0.2, "m; a normal line is this plus the depth long",
+          0.0, 1000.0),
     Param("marker_rate_hz", 5.0, "Hz; MarkerArrays per second at most (bodies, contact "
           "points, normals)", 0.1, 1000.0),
     Param("marker_bodies", True, "draw the bodies in the MarkerArray (at 1,000 bodies "

@@ -13,9 +13,11 @@ For each case (bodies, rate, input message, markers on or off):
     ~5 ms, so it may fall short of the rate: "published" says how many it sent);
   - here, a subscriber timing each ``contacts`` message against its stamp
     (latency = receive wall time - stamp).
-Reported: messages published, answered (distinct stamps), unanswered share, latency
-p50 / p99 / max (ms) over the answered ones after the first second, and the node's CPU
-(user + system time over the run / its length, 1.0 = one core).
+Reported: messages published from the first one the node answered on (the ones before
+were lost to discovery), how many of those were answered (distinct stamps), the
+unanswered share, latency p50 / p99 / max (ms) over the answered ones after the first
+second, and the node's CPU (user + system time over the run / its length, 1.0 = one
+core).
 
     . tools/env.sh && python bench/node_latency.py [--bodies 100 1000] [--seconds 10]
 """
@@ -54,7 +56,7 @@ pub = node.create_publisher(BodyPoseArray if kind == "BodyPoseArray" else PoseAr
                             "body_poses" if kind == "BodyPoseArray" else "pose_array", 10)
 time.sleep(2.0)                        # discovery
 rng = np.random.default_rng(1)
-count, t0 = 0, time.time()
+stamps, t0 = [], time.time()
 nxt = t0
 while time.time() < t0 + seconds:
     pos, quat = move(rng, pos, quat)
@@ -65,10 +67,10 @@ while time.time() < t0 + seconds:
     now = time.time()                  # stamped once built: the latency is the node's
     msg.header.stamp = Time(sec=int(now), nanosec=int((now % 1) * 1e9))
     pub.publish(msg)
-    count += 1
+    stamps.append(msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec)
     nxt += 1.0 / rate
     time.sleep(max(0.0, nxt - time.time()))
-print(count, flush=True)
+print(" ".join(repr(s) for s in stamps), flush=True)
 node.destroy_node()
 rclpy.shutdown()
 """
@@ -127,15 +129,18 @@ def run_case(n, rate, kind, markers, seconds):
         while time.time() < end:
             rclpy.spin_once(sub, timeout_sec=0.01)
         cpu = (cpu_seconds(node.pid) - c0) / (time.time() - w0)
-        published = int(pub.stdout.read().split()[-1])
+        sent = [float(x) for x in pub.stdout.read().split()]
         sub.destroy_node()
         rclpy.shutdown()
         node.terminate()
         node.wait(timeout=30)
     stamps = sorted(seen)
     lat = np.array([seen[s] for s in stamps if s > stamps[0] + 1.0]) if stamps else np.zeros(1)
-    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(published),
-            str(len(stamps)), f"{1 - len(stamps) / max(published, 1):.1%}",
+    # messages sent once the node had answered one (before that: discovery)
+    published = [s for s in sent if stamps and s >= stamps[0]]
+    answered = set(stamps) & set(published)
+    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(len(published)),
+            str(len(answered)), f"{1 - len(answered) / max(len(published), 1):.1%}",
             f"{1e3 * np.percentile(lat, 50):.2f}", f"{1e3 * np.percentile(lat, 99):.2f}",
             f"{1e3 * lat.max():.2f}", f"{cpu:.2f}"]
 

@@ -47,7 +47,16 @@ newest is a time reset (a bag loops, a simulator restarts): every contact ends, 
 is logged and the new time is taken.  A broken configuration is reported in one clear
 line and the process exits with status 1 before spinning.
 """
-import collections
+import os
+
+# numba's OpenMP threads spin-wait after each parallel region; in a node that sleeps
+# between messages that spinning took most of a core and slowed the other processes
+# (bench/node_latency.py at 1,000 bodies and 100 Hz: node CPU 0.88 of a core, p50 5.7
+# ms; passive: 0.23, 3.8 ms).  Set before numba starts its threads; a user's own
+# setting wins.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import collections  # noqa: E402
 import math
 import time
 from dataclasses import dataclass
@@ -150,8 +159,10 @@ PARAMETERS = (
           0.0, 1000.0),
     Param("marker_rate_hz", 5.0, "Hz; MarkerArrays per second at most (bodies, contact "
           "points, normals)", 0.1, 1000.0),
-    Param("marker_bodies", True, "draw the bodies in the MarkerArray (at 1,000 bodies "
-          "~50 ms to serialise a MarkerArray)"),
+    Param("marker_bodies", True, "draw the bodies in the MarkerArray"),
+    Param("marker_max_bodies", 200, "body markers per MarkerArray at most; larger scenes "
+          "are drawn in turns of this many (1,000 body markers take ~50 ms to serialise)",
+          1, 1000000),
     Param("marker_deep_depth", 0.01, "m; a body with a contact deeper than this is drawn "
           "red (touching: orange, free: grey)", 0.0, 1000.0),
     Param("warn_throttle_s", 2.0, "s; least interval between two warnings of one reason",
@@ -625,7 +636,8 @@ class CollisionNode(Node):
             self._markers_at = now
             self.pub_markers.publish(self.painter.marker_array(
                 self.scene, contacts, self.stamp, frame, self.cfg["marker_normal_length"],
-                self.cfg["marker_deep_depth"], bodies=self.cfg["marker_bodies"]))
+                self.cfg["marker_deep_depth"], bodies=self.cfg["marker_bodies"],
+                max_bodies=self.cfg["marker_max_bodies"]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
 

@@ -92,6 +92,7 @@ class MarkerPainter:
 
     def __init__(self):
         self._bodies = {}          # slot -> (Body, Marker)
+        self._cursor = 0           # where the next window of bodies starts
 
     def _body_marker(self, scene, slot, body):
         shape, m = body.shape, Marker()
@@ -148,20 +149,30 @@ class MarkerPainter:
          m.pose.orientation.w) = (float(x) for x in q)
 
     def marker_array(self, scene, contacts, stamp=None, frame_id="world",
-                     normal_length=0.2, deep=0.01, point_size=0.04, bodies=True):
+                     normal_length=0.2, deep=0.01, point_size=0.04, bodies=True,
+                     max_bodies=None):
         """The MarkerArray of ``scene``'s bodies (``bodies``) and of ``contacts`` (any
         object with ``body_a``, ``body_b``, ``position``, ``normal``, ``depth``); a body
-        with a contact deeper than ``deep`` (m) is drawn red."""
+        with a contact deeper than ``deep`` (m) is drawn red.  ``max_bodies``: at most
+        this many body markers per array, the next ones in slot order each call (a
+        marker stays in RViz until replaced), so one array's cost stays bounded."""
         out = MarkerArray()
         if bodies:
             depth = np.full(scene.n_slots, -1.0)
             if len(contacts.depth):
                 np.maximum.at(depth, contacts.body_a, contacts.depth)
                 np.maximum.at(depth, contacts.body_b, contacts.depth)
-            live = {}
-            for body in scene.bodies():
+            every = scene.bodies()
+            shown = every
+            if max_bodies is not None and len(every) > max_bodies:
+                start = self._cursor % len(every)
+                shown = (every + every)[start:start + max_bodies]
+                self._cursor = start + max_bodies
+            live = {scene.index[b.name]: self._bodies.get(scene.index[b.name])
+                    for b in every}
+            for body in shown:
                 slot = scene.index[body.name]
-                kept = self._bodies.get(slot)
+                kept = live[slot]
                 m = kept[1] if kept is not None and kept[0] is body else \
                     self._body_marker(scene, slot, body)
                 live[slot] = (body, m)
@@ -176,7 +187,7 @@ class MarkerPainter:
                 gone = Marker(ns="bodies", id=int(slot), action=Marker.DELETE)
                 gone.header.frame_id = frame_id
                 out.markers.append(gone)
-            self._bodies = live
+            self._bodies = {slot: kept for slot, kept in live.items() if kept is not None}
         pos = np.asarray(contacts.position, float)
         for ns, kind in (("contacts", Marker.SPHERE_LIST), ("normals", Marker.LINE_LIST)):
             m = Marker(ns=ns, id=0, type=kind)

@@ -145,3 +145,20 @@ def test_pose_array_from_cdr_equals_rclpy(n, frame):
     assert np.array_equal(p, want_p) and np.array_equal(q, want_q)
     with pytest.raises(ValueError):
         pose_array_from_cdr(data[:len(data) - 8] if n else data[:10])
+
+
+def test_large_scenes_draw_their_bodies_in_turns():
+    from mkcollision_ros.scene import Scene
+    from msg_adapters.markers import MarkerPainter
+    sc = Scene([{"name": f"b{i}", "shape": {"type": "sphere", "radius": 0.1},
+                 "pose": ([float(i), 0.0, 0.0], [0, 0, 0, 1])} for i in range(10)])
+    c = contacts(0)
+    painter = MarkerPainter()
+    seen = []
+    for _ in range(3):
+        out = painter.marker_array(sc, c, max_bodies=4).markers
+        seen.append([m.id for m in out if m.ns == "bodies"])
+    assert seen == [[0, 1, 2, 3], [4, 5, 6, 7], [8, 9, 0, 1]]
+    sc.remove_body("b5")                       # deleted at once, not in its turn
+    out = painter.marker_array(sc, c, max_bodies=4).markers
+    assert [m.id for m in out if m.ns == "bodies" and m.action == m.DELETE] == [5]

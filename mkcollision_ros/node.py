@@ -81,7 +81,7 @@ from visualization_msgs.msg import MarkerArray
 
 import msg_adapters
 
-from . import compile_progress
+from . import compile_progress, rerun_log
 from .arbiters import EV_PERSISTED
 from .config import bodies_from_params, pose_topics_from_params
 from .crosscheck import cross_check, describe, repro
@@ -165,6 +165,15 @@ PARAMETERS = (
           1, 1000000),
     Param("marker_deep_depth", 0.01, "m; a body with a contact deeper than this is drawn "
           "red (touching: orange, free: grey)", 0.0, 1000.0),
+    Param("rerun", "off", "rerun sink of each step: off, save:<file.rrd>, "
+          "connect[:<url>] or serve[:[<ip>:]<port>] (serving binds 127.0.0.1 unless an "
+          "address is named)"),
+    Param("rerun_pairs", "", "pairs drawn with their Minkowski difference and the "
+          "method's iterations in rerun, comma-separated name_a:name_b"),
+    Param("rerun_web_port", 9090, "port of the serve sink's web viewer, on the serve "
+          "address (0: none)", 0, 65535),
+    Param("rerun_memory_limit", "256MiB", "the serve sink's buffer for viewers that "
+          "connect late, oldest data dropped first (rerun's size syntax)"),
     Param("warn_throttle_s", 2.0, "s; least interval between two warnings of one reason",
           0.0, 3600.0),
     Param("max_abs_coordinate", 1.0e6, "m; a pose with a coordinate beyond this is dropped",
@@ -220,6 +229,14 @@ def parameter_table():
         rows.append(f"| `{p.name}` | {kinds[type(p.default)]} | `{default}` | {values} | "
                     f"{'no' if p.read_only else 'yes'} | {p.description} |")
     return "\n".join(rows) + "\n"
+
+
+RERUN_PARAMETERS = ("rerun", "rerun_pairs", "rerun_web_port", "rerun_memory_limit")
+
+
+def _rerun_pairs(text):
+    """The ``rerun_pairs`` parameter ("a:b, c:d") as [(a, b), ...]; ValueError if bad."""
+    return rerun_log.parse_pairs([p.strip() for p in text.split(",") if p.strip()])
 
 
 class ConfigError(ValueError):
@@ -299,6 +316,12 @@ class CollisionNode(Node):
         self._names_slots = None
         self.painter = msg_adapters.MarkerPainter()
         self._markers_at = -math.inf
+        self.rerun = None                 # rerun_log.RerunLog while a sink is open
+        self.rerun_errors = 0
+        try:
+            self._open_rerun()
+        except (ValueError, OSError, RuntimeError) as err:
+            raise ConfigError(f"parameter 'rerun': {err}") from None
         self._diag_steps = 0
         self._diag_t = time.monotonic()
 
@@ -407,6 +430,8 @@ class CollisionNode(Node):
         try:
             self.pipeline.config.replace(**{k: v for k, v in changes.items()
                                             if k in PIPELINE_SETTINGS})
+            rerun_log.parse_sink(changes.get("rerun", self.cfg["rerun"]))
+            _rerun_pairs(changes.get("rerun_pairs", self.cfg["rerun_pairs"]))
             bodies_from_params(bodies)
         except ValueError as err:
             return SetParametersResult(successful=False, reason=str(err))
@@ -437,6 +462,13 @@ class CollisionNode(Node):
                             old.shape, old.static, old.group, old.mask):
                         self.scene.replace_body(body)
             self._scene_changed()
+        if names & set(RERUN_PARAMETERS):
+            try:
+                self._open_rerun()
+            except (ValueError, OSError, RuntimeError) as err:
+                self.rerun_errors += 1
+                self.get_logger().error(f"rerun sink {self.cfg['rerun']!r} not opened, "
+                                        f"rerun logging is off: {err}")
         if "rate_hz" in names and self.timer is not None:
             self.destroy_timer(self.timer)
             self.timer = self.create_timer(1.0 / self.cfg["rate_hz"], self._on_timer)
@@ -640,6 +672,34 @@ class CollisionNode(Node):
                 max_bodies=self.cfg["marker_max_bodies"]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
+        if self.rerun is not None:
+            try:
+                self.rerun.log_step(self.scene, res, self.steps, latency=now - self.newest)
+            except Exception as err:  # noqa: BLE001 - logging must not stop the node
+                self.rerun_errors += 1
+                self._warn("rerun error", f"rerun logging failed this step: {err!r}")
+
+    def _open_rerun(self):
+        """(Re)open the rerun sink the parameters name (closing the previous one)."""
+        if self.rerun is not None:
+            self.rerun.close()
+            self.rerun = None
+        sink = rerun_log.parse_sink(self.cfg["rerun"])
+        if sink.kind == "off":
+            return
+        self.rerun = rerun_log.RerunLog(
+            sink, _rerun_pairs(self.cfg["rerun_pairs"]), deep=self.cfg["marker_deep_depth"],
+            normal_length=self.cfg["marker_normal_length"],
+            memory_limit=self.cfg["rerun_memory_limit"],
+            web_port=self.cfg["rerun_web_port"], application_id="mkcollision_ros",
+            recording_id=self.get_fully_qualified_name())
+        self.get_logger().info(f"rerun: {self.rerun.where}")
+
+    def destroy_node(self):
+        if self.rerun is not None:
+            self.rerun.close()
+            self.rerun = None
+        return super().destroy_node()
 
     def _cross_check(self, pairs):
         n, found = cross_check(self.scene, pairs, self.cfg["cross_check_depth_tol"],
@@ -671,6 +731,8 @@ class CollisionNode(Node):
         elif self.disagreements:
             level, why = DiagnosticStatus.WARN, (f"{self.disagreements} MPR / GJK-EPA "
                                                  f"disagreements")
+        elif self.rerun_errors:
+            level, why = DiagnosticStatus.WARN, f"{self.rerun_errors} rerun logging errors"
         elif sum(self.dropped.values()):
             level, why = DiagnosticStatus.WARN, "input dropped: " + ", ".join(
                 f"{k} {v}" for k, v in sorted(self.dropped.items()))
@@ -688,6 +750,7 @@ class CollisionNode(Node):
             "truncated steps": self.truncated_steps,
             "cross-checked pairs": self.cross_checked,
             "cross-check disagreements": self.disagreements,
+            "rerun": self.cfg["rerun"], "rerun errors": self.rerun_errors,
         }
         values.update({f"dropped: {k}": v for k, v in sorted(self.dropped.items())})
         return DiagnosticStatus(

@@ -7,6 +7,7 @@ Plain Python + numba, no rclpy.
     p.scene.add_body({...}); p.scene.remove_body("crate")   # edits between steps
     p.configure(contact_margin=0.002, method="mpr")          # settings between steps
     res = p.step()                                     # the scene's own poses
+    p = Pipeline(bodies, rerun="save:run.rrd")         # log each step (rerun_log.py)
 
 One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
   edits        arbiters of bodies removed or given a new shape since the last step end,
@@ -271,7 +272,7 @@ class Pipeline:
     list.  Invalid bodies or settings raise ValueError.
     """
 
-    def __init__(self, scene, config=None, allowed_pairs=()):
+    def __init__(self, scene, config=None, allowed_pairs=(), rerun=None, rerun_pairs=()):
         config = PipelineConfig() if config is None else config
         if not isinstance(config, PipelineConfig):
             raise ValueError(f"config must be a PipelineConfig, got {type(config).__name__}")
@@ -295,6 +296,29 @@ class Pipeline:
         self.arbiters = ArbiterSet(config.merge_distance, config.drift_threshold,
                                    config.max_contacts, config.stale_steps)
         self._pending = Events.empty()
+        self.steps = 0
+        self.rerun = None
+        self.set_rerun(rerun, rerun_pairs)
+
+    def set_rerun(self, sink, pairs=(), **options):
+        """Log each step to rerun (rerun_log.RerunLog: ``sink`` a rerun_log.SINK_FORMS
+        string, or a RerunLog; ``pairs`` the Minkowski view's pairs; ``options`` go to
+        RerunLog), or stop logging (None / "off": rerun is not imported).  The previous
+        sink is closed."""
+        from . import rerun_log
+        if isinstance(sink, rerun_log.RerunLog):
+            new = sink
+        elif sink is None or rerun_log.parse_sink(sink).kind == "off":
+            new = None
+        else:
+            new = rerun_log.RerunLog(sink, pairs, **options)
+        if self.rerun is not None and self.rerun is not new:
+            self.rerun.close()
+        self.rerun = new
+
+    def close(self):
+        """Flush and close the rerun sink, if any."""
+        self.set_rerun(None)
 
     def end_contacts(self):
         """End every pair's contacts now (a time reset, as when a bag loops); their
@@ -402,8 +426,12 @@ class Pipeline:
             names = list(names)
             for slot, name in retired.items():
                 names[slot] = name
-        return self._result(names, stamp, narrow, classified, events, timings,
-                            len(candidates))
+        result = self._result(names, stamp, narrow, classified, events, timings,
+                              len(candidates))
+        self.steps += 1
+        if self.rerun is not None:
+            self.rerun.log_step(self.scene, result, self.steps)
+        return result
 
     # -- the phases ---------------------------------------------------------------
     def _reach(self):

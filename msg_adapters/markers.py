@@ -22,65 +22,20 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from mkcollision_ros.meshes import PLANE_SIZE, icosphere, support_points
+
 FREE = ColorRGBA(r=0.6, g=0.6, b=0.6, a=0.5)
 TOUCHING = ColorRGBA(r=1.0, g=0.6, b=0.0, a=0.7)
 DEEP = ColorRGBA(r=1.0, g=0.0, b=0.0, a=0.8)
 CONTACT = ColorRGBA(r=0.1, g=0.3, b=1.0, a=1.0)
 NORMAL = ColorRGBA(r=0.0, g=0.8, b=0.2, a=1.0)
-PLANE_SIZE = 20.0       # m, the side of a plane's patch
 PLANE_THICKNESS = 0.002
-
-
-def _icosphere(levels=1):
-    """Unit vertices (V, 3) and triangles (F, 3) of a subdivided icosahedron."""
-    t = (1.0 + math.sqrt(5.0)) / 2.0
-    v = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
-         [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]]
-    f = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-         [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-         [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
-    v = [np.array(x, float) / np.linalg.norm(x) for x in v]
-    for _ in range(levels):
-        mid, nf = {}, []
-
-        def middle(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in mid:
-                m = v[a] + v[b]
-                v.append(m / np.linalg.norm(m))
-                mid[key] = len(v) - 1
-            return mid[key]
-        for a, b, c in f:
-            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
-            nf += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-        f = nf
-    return np.array(v), np.array(f)
 
 
 # 12 directions and 20 triangles a mesh: 60 points, so a MarkerArray of 1,000 bodies
 # stays near a megabyte (the next level, 240 points a mesh, was 2.7 MB and 130 ms to
 # serialise in rclpy)
-DIRS, TRIS = _icosphere(0)
-
-
-def support_points(shape, verts, dirs=DIRS):
-    """Support points (D, 3), body frame, of a capsule, cone or convex ``shape`` dict
-    along unit directions ``dirs`` (D, 3); ``verts`` (M, 3): a hull's stored points."""
-    kind, u = shape["type"], dirs
-    if kind == "capsule":
-        h = 0.5 * float(shape["length"])
-        p = float(shape["radius"]) * u + np.outer(np.where(u[:, 2] >= 0, h, -h), [0, 0, 1])
-    elif kind == "cone":
-        r, h = float(shape["radius"]), 0.5 * float(shape["height"])
-        s = np.linalg.norm(u[:, :2], axis=1)
-        rim = np.zeros_like(u)
-        rim[:, :2] = r * u[:, :2] / np.where(s > 0, s, 1.0)[:, None]
-        rim[:, 2] = -h
-        tip = np.array([0.0, 0.0, h])
-        p = np.where((np.sum(rim * u, axis=1) >= u @ tip)[:, None], rim, tip)
-    else:
-        p = verts[np.argmax(u @ verts.T, axis=1)]
-    return p + float(shape.get("margin", 0.0)) * u
+DIRS, TRIS = icosphere(0)
 
 
 def _points(rows):
@@ -128,7 +83,7 @@ class MarkerPainter:
             else:
                 first, count = scene.table.vrange[slot]
                 verts = scene.table.verts[first:first + count]
-            pts = support_points(shape, verts)
+            pts = support_points(shape, verts, DIRS)
             m.points = _points(pts[TRIS.reshape(-1)])
         return m
 

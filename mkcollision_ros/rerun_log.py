@@ -1,0 +1,513 @@
+"""Rerun logging of a scene's steps: bodies, contacts, events, timings and, for chosen
+pairs, the Minkowski difference with the iterations of the method that answered.
+
+    from mkcollision_ros.pipeline import Pipeline
+    p = Pipeline(bodies, rerun="save:run.rrd")        # library: a keyword
+    # node: the parameter ``rerun`` (same text), ``rerun_pairs`` (["a:b", ...])
+
+Sinks (``parse_sink``; rerun is imported only when one is opened, never for "off"):
+  off                         nothing
+  save:<file.rrd>             stream to a file (bounded memory: the file sink writes
+                              as it goes)
+  connect[:<url>]             stream to a running viewer (gRPC, default
+                              rerun+http://127.0.0.1:9876/proxy)
+  serve[:[<ip>:]<port>]       host a gRPC server (default 127.0.0.1:9876; it buffers at
+                              most ``memory_limit`` for viewers that connect late, the
+                              oldest data dropped first) and, when ``web_port`` > 0, a
+                              web viewer on the same address (a child ``rerun`` process,
+                              stopped with the logger)
+
+Entities (world frame, metres; timelines ``step`` (sequence) and ``stamp`` (the poses'
+time: a timestamp when it is a date after 1973, else a duration)):
+  world/bodies/{ellipsoids,boxes,capsules,cylinders}  rerun primitives, one instance a
+                              body in slot order, labelled with its name, coloured free /
+                              touching / deep (FREE, TOUCHING, DEEP; deep: a contact
+                              deeper than ``deep`` m); spheres are ellipsoids
+  world/bodies/meshes         cones, convex hulls and planes (a PLANE_SIZE patch) as one
+                              mesh (meshes.shape_mesh), vertex colours by state
+  world/bodies/mesh_names     the meshes' names, as labels at their body origins
+  world/contacts              contact positions labelled "a-b #id"; beside them, per
+                              instance: contact_id, body_a, body_b, age, depth, method,
+                              status (rr.AnyValues)
+  world/normals               an arrow per contact along the normal, normal_length +
+                              depth long
+  world/witness               the witness points, point_a then point_b for each contact
+  tables/contacts             the contacts as a markdown table (pair, id, age, depth,
+                              normal, method, status), the deepest ``table_rows`` first
+  events                      one text entry per step with events: began / ended pairs
+                              and contacts
+  stats                       contacts, touching pairs, candidate pairs (series)
+  timing                      step latency and each phase's time, ms (series)
+  minkowski/<a>-<b>/...       for each chosen pair (trace.trace_pair): the difference
+                              A - B as a mesh, the origin, the answer (the point
+                              point_a - point_b), and the iterations on the ``iteration``
+                              timeline: mpr/portal, gjk/simplex, epa/polytope
+A blueprint lays these out: the 3D view, the series, the table, the events and one
+view per chosen pair.  Every archetype is logged with one call per step.
+"""
+import os
+import shutil
+import signal
+import subprocess
+from typing import NamedTuple
+
+import numpy as np
+
+from .arbiters import quat_matrices
+from .kernels.constants import METHOD_NAMES
+from .meshes import shape_mesh
+from .results import Status
+
+STATUS_NAMES = tuple(s.name.lower() for s in sorted(Status))
+
+FREE = (150, 150, 150, 255)
+TOUCHING = (255, 150, 0, 255)
+DEEP = (230, 20, 20, 255)
+CONTACT = (30, 80, 255, 255)
+NORMAL = (0, 200, 60, 255)
+WITNESS_A = (255, 0, 255, 255)
+WITNESS_B = (0, 220, 220, 255)
+DEFAULT_CONNECT = "rerun+http://127.0.0.1:9876/proxy"
+DEFAULT_SERVE = ("127.0.0.1", 9876)
+SINK_FORMS = "off | save:<file.rrd> | connect[:<url>] | serve[:[<ip>:]<port>]"
+_DATE = 1e8          # s: a stamp beyond this (1973) is a date, else a duration
+_SHAPE_GROUPS = {"sphere": "ellipsoids", "ellipsoid": "ellipsoids", "box": "boxes",
+                 "capsule": "capsules", "cylinder": "cylinders", "cone": "meshes",
+                 "convex": "meshes", "plane": "meshes"}
+
+
+class Sink(NamedTuple):
+    """A parsed sink: kind "off" / "save" / "connect" / "serve"; target: the file
+    (save), the URL (connect) or (ip, port) (serve)."""
+    kind: str
+    target: object = None
+
+
+def parse_sink(text):
+    """The Sink that ``text`` names (SINK_FORMS); ValueError with the expected forms."""
+    if not isinstance(text, str):
+        raise ValueError(f"rerun sink must be a string ({SINK_FORMS}), got {text!r}")
+    kind, _, rest = text.strip().partition(":")
+    if kind in ("", "off") and not rest:
+        return Sink("off")
+    if kind == "save":
+        if not rest:
+            raise ValueError("rerun sink save:<file.rrd> needs a file name")
+        return Sink("save", rest)
+    if kind == "connect":
+        url = rest or DEFAULT_CONNECT
+        if not url.startswith(("rerun://", "rerun+http://", "rerun+https://")):
+            raise ValueError(f"rerun sink connect:<url>: the url must start with "
+                             f"rerun://, rerun+http:// or rerun+https://, got {url!r}")
+        return Sink("connect", url)
+    if kind == "serve":
+        ip, port = DEFAULT_SERVE
+        if rest:
+            head, _, tail = rest.rpartition(":")
+            ip = head or ip
+            try:
+                port = int(tail)
+            except ValueError:
+                raise ValueError(f"rerun sink serve:[<ip>:]<port>: bad port {tail!r}") \
+                    from None
+            if not 0 < port < 65536:
+                raise ValueError(f"rerun sink serve: port {port} not in 1..65535")
+        return Sink("serve", (ip, port))
+    raise ValueError(f"unknown rerun sink {text!r}; expected {SINK_FORMS}")
+
+
+def parse_pairs(items):
+    """[(name_a, name_b), ...] from "a:b" strings or 2-sequences; ValueError otherwise."""
+    out = []
+    for item in items:
+        if isinstance(item, str):
+            a, sep, b = item.partition(":")
+        elif isinstance(item, (list, tuple)) and len(item) == 2:
+            (a, b), sep = item, ":"
+        else:
+            a = b = sep = ""
+        if not sep or not a or not b or not isinstance(a, str) or not isinstance(b, str):
+            raise ValueError(f"a rerun pair is \"name_a:name_b\", got {item!r}")
+        out.append((a, b))
+    return out
+
+
+def _colors(depth, deep):
+    """uint8 (N, 4) state colours from each body's deepest contact (-1: none)."""
+    c = np.empty((len(depth), 4), np.uint8)
+    c[:] = FREE
+    c[depth >= 0.0] = TOUCHING
+    c[depth > deep] = DEEP
+    return c
+
+
+class _Groups(NamedTuple):
+    """The scene's bodies sorted into rerun archetypes (rebuilt on each scene edit)."""
+    slots: dict          # group -> int64 slots
+    names: dict          # group -> list of names
+    dims: dict           # group -> arrays of the archetype's size fields
+    mesh_local: np.ndarray    # float64 (V, 3) body-frame mesh vertices
+    mesh_owner: np.ndarray    # int64 (V,) index into slots["meshes"]
+    mesh_tris: np.ndarray     # uint32 (F, 3)
+
+
+def _groups(scene):
+    slots = {g: [] for g in ("ellipsoids", "boxes", "capsules", "cylinders", "meshes")}
+    names = {g: [] for g in slots}
+    dims = {g: [] for g in slots}
+    local, owner, tris, base = [], [], [], 0
+    table = scene.table
+    for body in scene.bodies():
+        slot = scene.index[body.name]
+        s = body.shape
+        g = _SHAPE_GROUPS[s["type"]]
+        m = float(s.get("margin", 0.0))
+        slots[g].append(slot)
+        names[g].append(body.name)
+        if s["type"] == "sphere":
+            dims[g].append(np.full(3, float(s["radius"]) + m))
+        elif s["type"] == "ellipsoid":
+            dims[g].append(np.asarray(s["radii"], float) + m)
+        elif g == "boxes":
+            dims[g].append(0.5 * np.asarray(s["size"], float) + m)
+        elif g == "capsules":
+            dims[g].append((float(s["radius"]) + m, float(s["length"])))
+        elif g == "cylinders":
+            dims[g].append((float(s["radius"]) + m, float(s["height"]) + 2.0 * m))
+        else:
+            first, count = table.vrange[slot]
+            v, f = shape_mesh(s, table.verts[first:first + count])
+            local.append(v)
+            owner.append(np.full(len(v), len(slots[g]) - 1))
+            tris.append(f + base)
+            base += len(v)
+    cat = (lambda parts, shape, dt: np.concatenate(parts).astype(dt) if parts
+           else np.zeros(shape, dt))
+    return _Groups({g: np.array(v, np.int64) for g, v in slots.items()}, names,
+                   {g: np.array(v, float) for g, v in dims.items()},
+                   cat(local, (0, 3), np.float64), cat(owner, (0,), np.int64),
+                   cat(tris, (0, 3), np.uint32))
+
+
+def _markdown_table(names, res, rows):
+    """The deepest ``rows`` contacts of ``res`` as a markdown table."""
+    n = len(res.depth)
+    order = np.argsort(-res.depth, kind="stable")[:rows]
+    head = (f"{n} contacts" + (f", the deepest {len(order)}" if len(order) < n else "")
+            + "\n\n| pair | id | age | depth (m) | normal | method | status |\n"
+            "|---|---|---|---|---|---|---|\n")
+    lines = [f"| {names[res.body_a[i]]}-{names[res.body_b[i]]} | {res.contact_id[i]} "
+             f"| {res.age[i]} | {res.depth[i]:.6g} | "
+             f"({res.normal[i, 0]:.3f}, {res.normal[i, 1]:.3f}, {res.normal[i, 2]:.3f}) "
+             f"| {METHOD_NAMES[res.method[i]]} | {STATUS_NAMES[res.status[i]]} |"
+             for i in order]
+    return head + "\n".join(lines)
+
+
+class RerunLog:
+    """Logs steps to one rerun sink (module docstring).
+
+    sink: a SINK_FORMS string or a Sink; pairs: chosen pairs for the Minkowski view
+    ("a:b" or (a, b)); deep (m): the depth from which a body is drawn DEEP;
+    normal_length (m); point_size (m): contact point radius; table_rows: rows of the
+    contacts table; memory_limit: the serve sink's buffer; web_port: the serve sink's
+    web viewer (0: none); minkowski_method: the method traced for chosen pairs
+    ("auto": the one the pipeline would use for a single pair)."""
+
+    def __init__(self, sink, pairs=(), deep=0.01, normal_length=0.05, point_size=0.01,
+                 table_rows=50, memory_limit="256MiB", web_port=9090,
+                 application_id="mkcollision_ros", recording_id=None,
+                 minkowski_method="auto"):
+        self.sink = sink if isinstance(sink, Sink) else parse_sink(sink)
+        if self.sink.kind == "off":
+            raise ValueError("RerunLog needs a sink other than off")
+        self.pairs = parse_pairs(pairs)
+        self.deep, self.normal_length = float(deep), float(normal_length)
+        self.point_size, self.table_rows = float(point_size), int(table_rows)
+        self.minkowski_method = minkowski_method
+        import rerun as rr
+        import rerun.blueprint as rrb
+        self._rr, self._rrb = rr, rrb
+        self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
+        self._viewer = None
+        self.where = self._open(self.sink, memory_limit, int(web_port))
+        self._groups, self._version = None, None
+        self._timing_names = None
+        self._logged = set()         # groups with instances at the last step
+        self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        self.rec.log("stats", rr.SeriesLines(names=["contacts", "touching pairs",
+                                                    "candidate pairs"]), static=True)
+
+    # -- sinks ----------------------------------------------------------------------
+    def _open(self, sink, memory_limit, web_port):
+        """Open the sink; returns a line saying how to look at the recording."""
+        rr, bp = self._rr, self.blueprint()
+        if sink.kind == "save":
+            self.rec.save(sink.target, default_blueprint=bp)
+            return f"recording to {sink.target}; open it with: rerun {sink.target}"
+        if sink.kind == "connect":
+            self.rec.connect_grpc(sink.target, default_blueprint=bp)
+            return f"streaming to the viewer at {sink.target}"
+        ip, port = sink.target
+        server = rr.GrpcServerSink(bind_ip=ip, port=port, server_memory_limit=memory_limit)
+        self.rec.set_sinks(server, default_blueprint=bp)
+        where = f"serving on {server.uri} (open with: rerun --connect {server.uri})"
+        if web_port > 0:
+            exe = shutil.which("rerun")
+            if exe is None:
+                raise ValueError("rerun sink serve: the `rerun` executable (rerun-sdk) "
+                                 "is not on PATH, needed for the web viewer; set "
+                                 "web_port 0 to serve without it")
+            self._viewer = subprocess.Popen(
+                [exe, "--web-viewer", "--bind", ip, "--web-viewer-port", str(web_port),
+                 server.uri], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                start_new_session=True)
+            where += f"; web viewer: http://{ip}:{web_port}/?url={server.uri}"
+        return where
+
+    def blueprint(self):
+        """The layout: 3D scene | series, table, events | one view per chosen pair."""
+        rrb = self._rrb
+        side = rrb.Vertical(
+            rrb.TimeSeriesView(origin="stats", name="contacts"),
+            rrb.TimeSeriesView(origin="timing", name="time (ms)"),
+            rrb.TextDocumentView(origin="tables/contacts", name="contacts"),
+            rrb.TextLogView(origin="events", name="events"))
+        views = [rrb.Spatial3DView(origin="world", name="scene"), side]
+        views += [rrb.Spatial3DView(origin=f"minkowski/{a}-{b}", name=f"{a} - {b}")
+                  for a, b in self.pairs]
+        shares = [3, 2] + [2] * len(self.pairs)
+        return rrb.Blueprint(rrb.Horizontal(*views, column_shares=shares),
+                             collapse_panels=True)
+
+    def close(self):
+        """Flush and close the sink; stop the web viewer."""
+        self.rec.flush()
+        self.rec.disconnect()
+        if self._viewer is not None:
+            try:
+                os.killpg(self._viewer.pid, signal.SIGTERM)
+                self._viewer.wait(5)
+            except (ProcessLookupError, subprocess.TimeoutExpired):
+                pass
+            self._viewer = None
+
+    # -- one step -----------------------------------------------------------------
+    def log_step(self, scene, res, step, latency=None):
+        """Log one step: ``scene`` (scene.Scene) after the step, its StepResult ``res``,
+        the step counter and the step's latency (s; None: the sum of its phases)."""
+        rec = self.rec
+        rec.set_time("step", sequence=int(step))
+        if res.stamp >= _DATE:
+            rec.set_time("stamp", timestamp=res.stamp)
+        else:
+            rec.set_time("stamp", duration=res.stamp)
+        if self._version != (scene.version, scene.n_slots):
+            self._groups = _groups(scene)
+            self._version = (scene.version, scene.n_slots)
+        depth = np.full(scene.n_slots, -1.0)
+        if len(res.depth):
+            np.maximum.at(depth, res.body_a, res.depth)
+            np.maximum.at(depth, res.body_b, res.depth)
+        self._log_bodies(scene, _colors(depth, self.deep))
+        self._log_contacts(res)
+        self._log_events(res)
+        self._log_series(res, latency)
+        for a, b in self.pairs:
+            self._log_minkowski(scene, res, a, b)
+
+    def _clear_if_empty(self, path, group, n):
+        if n:
+            self._logged.add(group)
+        elif group in self._logged:
+            self.rec.log(path, self._rr.Clear(recursive=False))
+            self._logged.discard(group)
+        return n
+
+    def _log_bodies(self, scene, colors):
+        rr, rec, g = self._rr, self.rec, self._groups
+        posed = scene.posed
+        pos, quat = scene.positions, scene.orientations
+        for name in ("ellipsoids", "boxes", "capsules", "cylinders"):
+            keep = posed[g.slots[name]]
+            s = g.slots[name][keep]
+            path = f"world/bodies/{name}"
+            if not self._clear_if_empty(path, name, len(s)):
+                continue
+            dims = g.dims[name][keep]
+            labels = [n for n, k in zip(g.names[name], keep) if k]
+            common = dict(quaternions=quat[s], colors=colors[s], labels=labels,
+                          fill_mode="solid")
+            if name == "ellipsoids":
+                rec.log(path, rr.Ellipsoids3D(half_sizes=dims, centers=pos[s], **common))
+            elif name == "boxes":
+                rec.log(path, rr.Boxes3D(half_sizes=dims, centers=pos[s], **common))
+            elif name == "capsules":
+                # rerun places a capsule's end at the translation, extending along +z
+                axis = quat_matrices(quat[s])[:, :, 2]
+                rec.log(path, rr.Capsules3D(
+                    radii=dims[:, 0], lengths=dims[:, 1],
+                    translations=pos[s] - 0.5 * dims[:, 1:2] * axis, **common))
+            else:
+                rec.log(path, rr.Cylinders3D(radii=dims[:, 0], lengths=dims[:, 1],
+                                             centers=pos[s], **common))
+        s = g.slots["meshes"]
+        keep = posed[s]
+        if not self._clear_if_empty("world/bodies/meshes", "meshes", int(keep.sum())):
+            self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 0)
+            return
+        on = keep[g.mesh_owner]
+        tris = g.mesh_tris
+        if not keep.all():                 # drop unposed bodies' vertices and triangles
+            new_index = np.cumsum(on) - 1
+            tris = new_index[tris[on[tris].all(axis=1)]].astype(np.uint32)
+        owner = g.mesh_owner[on]
+        r = quat_matrices(quat[s])
+        world = (np.einsum("vij,vj->vi", r[owner], g.mesh_local[on]) + pos[s][owner])
+        rec.log("world/bodies/meshes", rr.Mesh3D(vertex_positions=world,
+                                                 triangle_indices=tris,
+                                                 vertex_colors=colors[s][owner]))
+        self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 1)
+        rec.log("world/bodies/mesh_names", rr.Points3D(
+            pos[s[keep]], radii=0.0, labels=[n for n, k in zip(g.names["meshes"], keep)
+                                             if k]))
+
+    def _log_contacts(self, res):
+        rr, rec = self._rr, self.rec
+        n = len(res.depth)
+        for path in ("world/contacts", "world/normals", "world/witness"):
+            self._clear_if_empty(path, path, n)
+        if not n:
+            rec.log("tables/contacts", rr.TextDocument("no contacts",
+                                                       media_type="text/markdown"))
+            return
+        names = np.array([x if x is not None else "?" for x in res.names], dtype=object)
+        labels = (names[res.body_a] + "-" + names[res.body_b] + " #"
+                  + res.contact_id.astype(str).astype(object))
+        rec.log("world/contacts",
+                rr.Points3D(res.position, radii=self.point_size, colors=CONTACT,
+                            labels=labels.tolist()),
+                rr.AnyValues(contact_id=res.contact_id, body_a=names[res.body_a].tolist(),
+                             body_b=names[res.body_b].tolist(), age=res.age,
+                             depth=res.depth, method=res.method, status=res.status))
+        rec.log("world/normals", rr.Arrows3D(
+            origins=res.position,
+            vectors=res.normal * (self.normal_length + res.depth)[:, None],
+            colors=NORMAL, radii=0.25 * self.point_size))
+        witness = np.concatenate([res.point_a, res.point_b])
+        colors = np.empty((2 * n, 4), np.uint8)
+        colors[:n], colors[n:] = WITNESS_A, WITNESS_B
+        rec.log("world/witness", rr.Points3D(witness, radii=0.5 * self.point_size,
+                                             colors=colors))
+        rec.log("tables/contacts", rr.TextDocument(
+            _markdown_table(names, res, self.table_rows), media_type="text/markdown"))
+
+    def _log_events(self, res):
+        ev = res.events
+        if not len(ev):
+            return
+        names = res.names
+        lines = []
+        for kind, a, b, cid in ev:
+            if kind == "persisted":
+                continue
+            what = "pair" if cid < 0 else f"contact #{cid}"
+            lines.append(f"{kind} {names[a]}-{names[b]} {what}")
+        if lines:
+            self.rec.log("events", self._rr.TextLog("\n".join(lines), level="INFO"))
+
+    def _log_series(self, res, latency):
+        rr, rec = self._rr, self.rec
+        rec.log("stats", rr.Scalars([len(res.depth), len(res.pairs),
+                                     res.n_candidate_pairs]))
+        phases = list(res.timings)
+        if self._timing_names != phases:
+            self._timing_names = phases
+            rec.log("timing", rr.SeriesLines(names=["step"] + phases), static=True)
+        total = sum(res.timings.values()) if latency is None else latency
+        rec.log("timing", rr.Scalars([1e3 * total] + [1e3 * res.timings[p]
+                                                        for p in phases]))
+
+    def _log_minkowski(self, scene, res, a, b):
+        from .trace import minkowski_difference, trace_pair
+        rr, rec = self._rr, self.rec
+        root = f"minkowski/{a}-{b}"
+        if a not in scene or b not in scene:
+            rec.log(f"{root}/note", rr.TextLog(f"{a} or {b} is not in the scene",
+                                               level="WARN"))
+            return
+        ia, ib = scene.index[a], scene.index[b]
+        if not (scene.posed[ia] and scene.posed[ib]):
+            return
+        ba, bb = scene.body(a), scene.body(b)
+        if "plane" in (ba.shape["type"], bb.shape["type"]):
+            rec.log(f"{root}/note", rr.TextLog("a plane has no support mapping: no "
+                                               "Minkowski difference", level="WARN"))
+            return
+        pa = (scene.positions[ia], scene.orientations[ia])
+        pb = (scene.positions[ib], scene.orientations[ib])
+        verts, tris = minkowski_difference(ba.shape, pa, bb.shape, pb)
+        tr = trace_pair(ba.shape, pa, bb.shape, pb, method=self.minkowski_method)
+        r = tr.result
+        gap = np.asarray(r.point_a) - np.asarray(r.point_b)
+        rec.log(f"{root}/difference", rr.Mesh3D(vertex_positions=verts,
+                                                triangle_indices=tris,
+                                                albedo_factor=(120, 160, 255, 255)))
+        rec.log(f"{root}/origin", rr.Points3D([[0.0, 0.0, 0.0]], radii=0.01,
+                                              colors=(255, 255, 255, 255),
+                                              labels=["origin"]))
+        rec.log(f"{root}/answer", rr.Arrows3D(
+            origins=[[0.0, 0.0, 0.0]], vectors=[gap], colors=DEEP,
+            labels=[f"{r.status.name.lower()} {r.distance:+.6g} m by {tr.answered_by}"]))
+        for i, (stage, portal) in enumerate(tr.mpr_portals):
+            rec.set_time("iteration", sequence=i)
+            loop = np.concatenate([portal, portal[:1]])
+            rec.log(f"{root}/mpr/portal", rr.LineStrips3D([loop], labels=[stage]))
+        for i, simplex in enumerate(tr.gjk_simplices):
+            rec.set_time("iteration", sequence=i)
+            rec.log(f"{root}/gjk/simplex", rr.LineStrips3D(_edges(simplex)),
+                    rr.Points3D(simplex, radii=0.005))
+        offset = len(tr.gjk_simplices)
+        for i, (pv, pf) in enumerate(tr.epa_polytopes):
+            rec.set_time("iteration", sequence=offset + i)
+            rec.log(f"{root}/epa/polytope", rr.Mesh3D(vertex_positions=pv,
+                                                      triangle_indices=pf))
+        rec.disable_timeline("iteration")
+
+
+def _edges(points):
+    """Line strips of every edge of a simplex's points (k, 3), k <= 4."""
+    k = len(points)
+    return [np.stack([points[i], points[j]]) for i in range(k) for j in range(i + 1, k)] \
+        or [np.stack([points[0], points[0]])]
+
+
+
+
+def read_recording(path):
+    """A recording's data, for tests and scripts: {entity path: [row, ...]} in log
+    order, each row a dict column -> value (timelines as int64: sequences, and
+    nanoseconds for stamps; components as lists, one entry per instance; colours as
+    packed 0xRRGGBBAA).  Static rows have no timeline columns."""
+    import pyarrow as pa
+    from rerun.chunk import RrdReader
+    out = {}
+    for chunk in RrdReader(str(path)).stream().to_chunks():
+        rb = chunk.to_record_batch()
+        cols = {}
+        for name, col in zip(rb.schema.names, rb.columns):
+            if name.startswith("rerun.controls"):
+                continue
+            if pa.types.is_timestamp(col.type) or pa.types.is_duration(col.type):
+                col = col.cast(pa.int64())
+            cols[name] = col.to_pylist()
+        rows = [{k: v[i] for k, v in cols.items()} for i in range(rb.num_rows)]
+        out.setdefault(chunk.entity_path, []).extend(rows)
+    for rows in out.values():
+        rows.sort(key=lambda r: (r.get("step", -1), r.get("iteration", -1)))
+    return out
+
+
+def rgba(packed):
+    """A packed 0xRRGGBBAA colour as an (r, g, b, a) tuple."""
+    return tuple(int(packed) >> s & 0xFF for s in (24, 16, 8, 0))

@@ -49,6 +49,7 @@ import os
 import shutil
 import signal
 import subprocess
+import time
 from typing import NamedTuple
 
 import numpy as np
@@ -285,11 +286,7 @@ class RerunLog:
         self.rec.flush()
         self.rec.disconnect()
         if self._viewer is not None:
-            try:
-                os.killpg(self._viewer.pid, signal.SIGTERM)
-                self._viewer.wait(5)
-            except (ProcessLookupError, subprocess.TimeoutExpired):
-                pass
+            _stop_group(self._viewer)
             self._viewer = None
 
     # -- one step -----------------------------------------------------------------
@@ -473,6 +470,25 @@ class RerunLog:
             rec.log(f"{root}/epa/polytope", rr.Mesh3D(vertex_positions=pv,
                                                       triangle_indices=pf))
         rec.disable_timeline("iteration")
+
+
+def _stop_group(proc, timeout=5.0):
+    """Stop a child started with its own session and everything in its process group
+    (the ``rerun`` wrapper leaves the real viewer running otherwise)."""
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            break
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            proc.poll()
+            try:
+                os.killpg(proc.pid, 0)
+            except ProcessLookupError:
+                return
+            time.sleep(0.05)
+    proc.poll()
 
 
 def _edges(points):

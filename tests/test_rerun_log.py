@@ -1,0 +1,267 @@
+"""Rerun logging (mkcollision_ros.rerun_log): the recordings read back and checked
+against the steps that produced them."""
+import os
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+
+import numpy as np
+import pytest
+
+from mkcollision_ros.arbiters import quat_matrices
+from mkcollision_ros.meshes import shape_mesh
+from mkcollision_ros.pipeline import Pipeline
+from mkcollision_ros.rerun_log import (DEEP, FREE, TOUCHING, RerunLog, Sink, parse_pairs,
+                                       parse_sink, read_recording, rgba)
+from oracles import quat_axis
+
+ROCK = np.random.default_rng(3).normal(size=(12, 3)) * 0.3
+BODIES = [
+    {"name": "floor", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
+     "static": True},
+    {"name": "ball", "shape": {"type": "sphere", "radius": 0.5}},
+    {"name": "egg", "shape": {"type": "ellipsoid", "radii": [0.3, 0.4, 0.6]}},
+    {"name": "crate", "shape": {"type": "box", "size": [1.0, 1.0, 1.0]}},
+    {"name": "pill", "shape": {"type": "capsule", "radius": 0.2, "length": 0.8}},
+    {"name": "can", "shape": {"type": "cylinder", "radius": 0.3, "height": 0.8,
+                              "margin": 0.01}},
+    {"name": "cone", "shape": {"type": "cone", "radius": 0.4, "height": 0.8}},
+    {"name": "rock", "shape": {"type": "convex", "points": ROCK.tolist()}},
+]
+NAMES = [b["name"] for b in BODIES]
+
+
+def poses(k, rng):
+    """Step k's poses: everything floats above the floor, the ball sinks into the crate
+    on steps 1-2 and leaves it on step 3."""
+    pos = np.array([[0, 0, 0], [0, 0, 3.0], [-2, 0, 3], [1.2, 0, 3], [3.5, 0, 3],
+                    [5, 0, 3], [6.5, 0, 3], [8.5, 0, 3]], float)
+    if k == 3:
+        pos[1, 1] = -3.0
+    quat = np.array([quat_axis(rng.normal(size=3), rng.uniform(0, np.pi))
+                     for _ in BODIES])
+    quat[:2] = [0, 0, 0, 1]
+    quat[3] = [0, 0, 0, 1]
+    return pos, quat
+
+
+def test_sink_forms_and_their_errors():
+    assert parse_sink("off") == Sink("off") and parse_sink("") == Sink("off")
+    assert parse_sink("save:/tmp/x.rrd") == Sink("save", "/tmp/x.rrd")
+    assert parse_sink("connect").target.startswith("rerun+http://127.0.0.1:")
+    assert parse_sink("connect:rerun+http://10.0.0.2:9876/proxy").target \
+        == "rerun+http://10.0.0.2:9876/proxy"
+    assert parse_sink("serve") == Sink("serve", ("127.0.0.1", 9876))
+    assert parse_sink("serve:9000") == Sink("serve", ("127.0.0.1", 9000))
+    assert parse_sink("serve:0.0.0.0:9001") == Sink("serve", ("0.0.0.0", 9001))
+    for bad, why in [("save:", "file"), ("connect:http://x", "must start with"),
+                     ("serve:abc", "bad port"), ("serve:70000", "port"),
+                     ("file:x", "unknown rerun sink"), (3, "string")]:
+        with pytest.raises(ValueError, match=why):
+            parse_sink(bad)
+    assert parse_pairs(["a:b", ("c", "d")]) == [("a", "b"), ("c", "d")]
+    for bad in ["ab", ":b", ("a",), 5]:
+        with pytest.raises(ValueError, match="name_a:name_b"):
+            parse_pairs([bad])
+
+
+def test_off_never_imports_rerun():
+    code = ("import sys, numpy as np\n"
+            "from mkcollision_ros.pipeline import Pipeline\n"
+            "p = Pipeline([{'name': 'a', 'shape': {'type': 'sphere', 'radius': 1.0}},"
+            " {'name': 'b', 'shape': {'type': 'sphere', 'radius': 1.0}}], rerun='off')\n"
+            "p.step(np.array([[0.0, 0, 0], [1.5, 0, 0]]), np.tile([0.0, 0, 0, 1], (2, 1)))\n"
+            "p.close()\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('rerun', 'rerun_bindings')))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    """Four steps of BODIES logged to a file, with their StepResults."""
+    path = tmp_path_factory.mktemp("rerun") / "steps.rrd"
+    p = Pipeline(BODIES, rerun=f"save:{path}")
+    rng = np.random.default_rng(11)
+    steps = []
+    for k in range(4):
+        pos, quat = poses(k, rng)
+        if k == 1:
+            pos[1, 0] = 0.55           # ball 0.35 m into the crate: deep
+        if k == 2:
+            pos[1, 0] = 0.205          # 5 mm into it: touching, not deep
+        res = p.step(pos, quat, 100.0 + 0.5 * k)
+        steps.append((pos, quat, res))
+    p.close()
+    return read_recording(path), steps
+
+
+def at_step(rows, k):
+    got = [r for r in rows if r.get("step") == k]
+    assert got, f"nothing logged at step {k}"
+    return got[-1]
+
+
+def test_every_body_is_its_shape_in_slot_order(recorded):
+    rec, steps = recorded
+    pos, quat, _ = steps[0]
+    ell = at_step(rec["/world/bodies/ellipsoids"], 1)
+    assert ell["Ellipsoids3D:labels"] == ["ball", "egg"]
+    np.testing.assert_allclose(ell["Ellipsoids3D:half_sizes"], [[0.5] * 3, [0.3, 0.4, 0.6]])
+    np.testing.assert_allclose(ell["Ellipsoids3D:centers"], pos[1:3], atol=1e-6)
+    np.testing.assert_allclose(np.abs(ell["Ellipsoids3D:quaternions"]),
+                               np.abs(quat[1:3]), atol=1e-6)
+    box = at_step(rec["/world/bodies/boxes"], 1)
+    assert box["Boxes3D:labels"] == ["crate"]
+    np.testing.assert_allclose(box["Boxes3D:half_sizes"], [[0.5] * 3])
+    # a capsule's end at its translation, the capsule along +z of its rotation
+    cap = at_step(rec["/world/bodies/capsules"], 1)
+    axis = quat_matrices(quat[4:5])[0, :, 2]
+    np.testing.assert_allclose(np.array(cap["Capsules3D:translations"][0]) + 0.4 * axis,
+                               pos[4], atol=1e-6)
+    assert cap["Capsules3D:lengths"] == [pytest.approx(0.8)]
+    cyl = at_step(rec["/world/bodies/cylinders"], 1)    # grown by its 1 cm margin
+    assert cyl["Cylinders3D:radii"] == [pytest.approx(0.31)]
+    assert cyl["Cylinders3D:lengths"] == [pytest.approx(0.82)]
+    # cone, rock and floor as one mesh: each body's mesh moved to its pose
+    mesh = at_step(rec["/world/bodies/meshes"], 1)
+    names = at_step(rec["/world/bodies/mesh_names"], 1)
+    assert names["Points3D:labels"] == ["floor", "cone", "rock"]
+    v = np.array(mesh["Mesh3D:vertex_positions"])
+    want = []
+    for i in (0, 6, 7):
+        s = BODIES[i]["shape"]
+        local, _ = shape_mesh(s, ROCK if s["type"] == "convex" else None)
+        want.append(local @ quat_matrices(quat[i:i + 1])[0].T + pos[i])
+    want = np.concatenate(want)
+    assert v.shape == want.shape
+    np.testing.assert_allclose(v, want, atol=1e-5 * max(1.0, np.abs(want).max()))
+    tris = np.array(mesh["Mesh3D:triangle_indices"])
+    assert tris.min() == 0 and tris.max() == len(v) - 1
+
+
+def test_colours_follow_the_contact_state(recorded):
+    rec, steps = recorded
+    colour = {}
+    for k in range(1, 5):
+        ell = at_step(rec["/world/bodies/ellipsoids"], k)
+        box = at_step(rec["/world/bodies/boxes"], k)
+        colour[k] = (rgba(ell["Ellipsoids3D:colors"][0]), rgba(box["Boxes3D:colors"][0]),
+                     rgba(ell["Ellipsoids3D:colors"][1]))
+    assert colour[1] == (FREE, FREE, FREE)
+    assert colour[2] == (DEEP, DEEP, FREE)          # 0.35 m deep
+    assert colour[3] == (TOUCHING, TOUCHING, FREE)  # 5 mm: below the 1 cm of "deep"
+    assert colour[4] == (FREE, FREE, FREE)
+
+
+def test_contacts_keep_their_ids_and_depths(recorded):
+    rec, steps = recorded
+    for k, (_, _, res) in enumerate(steps, start=1):
+        rows = [r for r in rec["/world/contacts"] if r.get("step") == k]
+        if not len(res.depth):
+            assert rows and "Clear:is_recursive" in rows[-1] or not rows
+            continue
+        row = rows[-1]
+        assert row["contact_id"] == res.contact_id.tolist()
+        assert row["depth"] == res.depth.tolist()
+        assert row["age"] == res.age.tolist()
+        names = [res.names[a] + "-" + res.names[b] for a, b in zip(res.body_a, res.body_b)]
+        assert row["Points3D:labels"] == [f"{n} #{i}" for n, i in zip(names, res.contact_id)]
+        np.testing.assert_allclose(row["Points3D:positions"], res.position, atol=1e-6)
+        arrows = at_step(rec["/world/normals"], k)
+        lengths = np.linalg.norm(arrows["Arrows3D:vectors"], axis=1)
+        np.testing.assert_allclose(lengths, 0.05 + res.depth, rtol=1e-5)
+        witness = at_step(rec["/world/witness"], k)
+        np.testing.assert_allclose(witness["Points3D:positions"],
+                                   np.concatenate([res.point_a, res.point_b]), atol=1e-6)
+    deep = steps[1][2]
+    i = [n for n, (a, b) in enumerate(zip(deep.body_a, deep.body_b))
+         if {deep.names[a], deep.names[b]} == {"ball", "crate"}]
+    assert len(i) == 1 and deep.depth[i[0]] == pytest.approx(0.35)
+    # the same contact at the next step keeps its id (a persistent arbiter)
+    nxt = steps[2][2]
+    assert deep.contact_id[i[0]] in nxt.contact_id
+    table = at_step(rec["/tables/contacts"], 2)["TextDocument:text"][0]
+    assert f"| ball-crate | {deep.contact_id[i[0]]} | 0 | 0.35" in table
+
+
+def test_events_and_series(recorded):
+    rec, steps = recorded
+    text = {r["step"]: r["TextLog:text"][0] for r in rec["/events"]}
+    assert "began ball-crate pair" in text[2]
+    assert "ended ball-crate pair" in text[4]
+    for k, (_, _, res) in enumerate(steps, start=1):
+        stats = at_step(rec["/stats"], k)["Scalars:scalars"]
+        assert stats == [len(res.depth), len(res.pairs), res.n_candidate_pairs]
+        timing = at_step(rec["/timing"], k)["Scalars:scalars"]
+        assert timing[1:] == pytest.approx([1e3 * t for t in res.timings.values()])
+        assert timing[0] == pytest.approx(1e3 * sum(res.timings.values()))
+    names = [r for r in rec["/timing"] if "SeriesLines:names" in r][0]
+    assert names["SeriesLines:names"] == ["step"] + list(steps[0][2].timings)
+    stamps = [at_step(rec["/stats"], k)["stamp"] for k in range(1, 5)]
+    assert stamps == [int(round(1e9 * (100.0 + 0.5 * k))) for k in range(4)]
+
+
+def test_scene_edits_change_what_is_drawn(tmp_path):
+    path = tmp_path / "edits.rrd"
+    p = Pipeline(BODIES[1:4], rerun=f"save:{path}")
+    q = np.tile([0.0, 0, 0, 1], (3, 1))
+    p.step(np.array([[0.0, 0, 0], [5, 0, 0], [10, 0, 0]]), q)
+    p.scene.remove_body("egg")
+    p.scene.add_body({"name": "rod", "shape": {"type": "capsule", "radius": 0.1,
+                                               "length": 1.0},
+                      "pose": ([0.0, 3.0, 0.0], [0, 0, 0, 1])})
+    p.step()
+    p.close()
+    rec = read_recording(path)
+    assert at_step(rec["/world/bodies/ellipsoids"], 1)["Ellipsoids3D:labels"] \
+        == ["ball", "egg"]
+    assert at_step(rec["/world/bodies/ellipsoids"], 2)["Ellipsoids3D:labels"] == ["ball"]
+    assert at_step(rec["/world/bodies/capsules"], 2)["Capsules3D:labels"] == ["rod"]
+
+
+def _listening(port):
+    """Local addresses listening on TCP ``port`` (from /proc/net/tcp)."""
+    found = []
+    with open("/proc/net/tcp") as f:
+        for line in f.readlines()[1:]:
+            local, state = line.split()[1], line.split()[3]
+            ip_hex, port_hex = local.split(":")
+            if state == "0A" and int(port_hex, 16) == port:
+                found.append(socket.inet_ntoa(bytes.fromhex(ip_hex)[::-1]))
+    return found
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_serve_binds_loopback_with_a_web_viewer():
+    grpc_port, web_port = _free_port(), _free_port()
+    log = RerunLog(f"serve:{grpc_port}", web_port=web_port, memory_limit="16MiB")
+    try:
+        assert _listening(grpc_port) == ["127.0.0.1"]
+        page = None
+        end = time.monotonic() + 30
+        while page is None and time.monotonic() < end:
+            try:
+                page = urllib.request.urlopen(f"http://127.0.0.1:{web_port}/",
+                                              timeout=2).read()
+            except OSError:
+                time.sleep(0.2)
+        assert page is not None and b"<html" in page.lower()
+        assert _listening(web_port) == ["127.0.0.1"]
+        assert f"127.0.0.1:{web_port}" in log.where
+        viewer = log._viewer
+    finally:
+        log.close()
+    assert viewer.poll() is not None            # the web viewer stopped with the log
+    with pytest.raises(ProcessLookupError):
+        os.killpg(viewer.pid, 0)

@@ -13,17 +13,18 @@ Every mesh is in the body frame, metres, with outward-wound triangles:
 A margin grows the mesh by that radius along each support direction (exact for the
 support-point meshes, along the rim's outward direction for cones and cylinders).
 """
+import functools
 import math
 
 import numpy as np
 
 PLANE_SIZE = 20.0       # m, the side of a plane's patch
-RIM = 32                # points on a cone's or cylinder's rim
+RIM = 24                # points on a cone's or cylinder's rim
 
 
-def icosphere(levels=1):
-    """Unit vertices float64 (V, 3) and outward triangles int64 (F, 3) of an icosahedron
-    subdivided ``levels`` times (12, 42, 162 ... vertices)."""
+@functools.lru_cache(maxsize=None)
+def _icosphere(levels):
+    """icosphere's arrays, computed once per level (read-only)."""
     t = (1.0 + math.sqrt(5.0)) / 2.0
     v = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
          [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]]
@@ -45,7 +46,15 @@ def icosphere(levels=1):
             ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
             nf += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
         f = nf
-    return np.array(v), np.array(f, dtype=np.int64)
+    v, f = np.array(v), np.array(f, dtype=np.int64)
+    v.flags.writeable = f.flags.writeable = False
+    return v, f
+
+
+def icosphere(levels=1):
+    """Unit vertices float64 (V, 3) and outward triangles int64 (F, 3) of an icosahedron
+    subdivided ``levels`` times (12, 42, 162 ... vertices); read-only arrays."""
+    return _icosphere(int(levels))
 
 
 def support_points(shape, verts, dirs):

@@ -27,8 +27,8 @@ time: a timestamp when it is a date after 1973, else a duration)):
                               mesh (meshes.shape_mesh), vertex colours by state
   world/bodies/mesh_names     the meshes' names, as labels at their body origins
   world/contacts              contact positions labelled "a-b #id"; beside them, per
-                              instance: contact_id, body_a, body_b, age, depth, method,
-                              status (rr.AnyValues)
+                              instance: contact_id, body_a, body_b (slots), age, depth,
+                              method, status (codes: constants.M_*, ST_*; rr.AnyValues)
   world/normals               an arrow per contact along the normal, normal_length +
                               depth long
   world/witness               the witness points, point_a then point_b for each contact
@@ -54,7 +54,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .arbiters import quat_matrices
+from .arbiters import EV_PERSISTED, KIND_NAMES, quat_matrices
 from .kernels.constants import METHOD_NAMES
 from .meshes import shape_mesh
 from .results import Status
@@ -133,12 +133,16 @@ def parse_pairs(items):
     return out
 
 
+def _packed(rgba_):
+    r, g, b, a = rgba_
+    return np.uint32((r << 24) | (g << 16) | (b << 8) | a)
+
+
 def _colors(depth, deep):
-    """uint8 (N, 4) state colours from each body's deepest contact (-1: none)."""
-    c = np.empty((len(depth), 4), np.uint8)
-    c[:] = FREE
-    c[depth >= 0.0] = TOUCHING
-    c[depth > deep] = DEEP
+    """uint32 (N,) packed state colours from each body's deepest contact (-1: none)."""
+    c = np.full(len(depth), _packed(FREE), np.uint32)
+    c[depth >= 0.0] = _packed(TOUCHING)
+    c[depth > deep] = _packed(DEEP)
     return c
 
 
@@ -147,7 +151,8 @@ class _Groups(NamedTuple):
     slots: dict          # group -> int64 slots
     names: dict          # group -> list of names
     dims: dict           # group -> arrays of the archetype's size fields
-    mesh_local: np.ndarray    # float64 (V, 3) body-frame mesh vertices
+    mesh_local: np.ndarray    # float64 (M, K, 3) body-frame mesh vertices, padded
+    mesh_valid: np.ndarray    # bool (M, K): the real ones (row-major: the mesh's order)
     mesh_owner: np.ndarray    # int64 (V,) index into slots["meshes"]
     mesh_tris: np.ndarray     # uint32 (F, 3)
 
@@ -184,10 +189,14 @@ def _groups(scene):
             base += len(v)
     cat = (lambda parts, shape, dt: np.concatenate(parts).astype(dt) if parts
            else np.zeros(shape, dt))
+    k = max((len(v) for v in local), default=0)
+    pad = np.zeros((len(local), k, 3))
+    valid = np.zeros((len(local), k), bool)
+    for i, v in enumerate(local):
+        pad[i, :len(v)], valid[i, :len(v)] = v, True
     return _Groups({g: np.array(v, np.int64) for g, v in slots.items()}, names,
-                   {g: np.array(v, float) for g, v in dims.items()},
-                   cat(local, (0, 3), np.float64), cat(owner, (0,), np.int64),
-                   cat(tris, (0, 3), np.uint32))
+                   {g: np.array(v, float) for g, v in dims.items()}, pad, valid,
+                   cat(owner, (0,), np.int64), cat(tris, (0, 3), np.uint32))
 
 
 def _markdown_table(names, res, rows):
@@ -216,7 +225,7 @@ class RerunLog:
     ("auto": the one the pipeline would use for a single pair)."""
 
     def __init__(self, sink, pairs=(), deep=0.01, normal_length=0.05, point_size=0.01,
-                 table_rows=50, memory_limit="256MiB", web_port=9090,
+                 table_rows=20, memory_limit="256MiB", web_port=9090,
                  application_id="mkcollision_ros", recording_id=None,
                  minkowski_method="auto"):
         self.sink = sink if isinstance(sink, Sink) else parse_sink(sink)
@@ -235,6 +244,8 @@ class RerunLog:
         self._groups, self._version = None, None
         self._timing_names = None
         self._logged = set()         # groups with instances at the last step
+        self._last = {}              # group -> (groups, posed, positions, quats, colours)
+        self._label_of = {}          # contact id -> its label
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log("stats", rr.SeriesLines(names=["contacts", "touching pairs",
                                                     "candidate pairs"]), static=True)
@@ -322,52 +333,78 @@ class RerunLog:
         return n
 
     def _log_bodies(self, scene, colors):
+        """One call per group and step.  A group's sizes, labels and triangles are
+        sent when its bodies change; each step sends only the poses and colours that
+        changed (rerun keeps the latest of each component), nothing for a group at rest."""
         rr, rec, g = self._rr, self.rec, self._groups
         posed = scene.posed
         pos, quat = scene.positions, scene.orientations
-        for name in ("ellipsoids", "boxes", "capsules", "cylinders"):
+        for name in ("ellipsoids", "boxes", "capsules", "cylinders", "meshes"):
             keep = posed[g.slots[name]]
             s = g.slots[name][keep]
             path = f"world/bodies/{name}"
             if not self._clear_if_empty(path, name, len(s)):
+                self._last.pop(name, None)
+                if name == "meshes":
+                    self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 0)
                 continue
-            dims = g.dims[name][keep]
-            labels = [n for n, k in zip(g.names[name], keep) if k]
-            common = dict(quaternions=quat[s], colors=colors[s], labels=labels,
-                          fill_mode="solid")
-            if name == "ellipsoids":
-                rec.log(path, rr.Ellipsoids3D(half_sizes=dims, centers=pos[s], **common))
-            elif name == "boxes":
-                rec.log(path, rr.Boxes3D(half_sizes=dims, centers=pos[s], **common))
-            elif name == "capsules":
-                # rerun places a capsule's end at the translation, extending along +z
-                axis = quat_matrices(quat[s])[:, :, 2]
-                rec.log(path, rr.Capsules3D(
-                    radii=dims[:, 0], lengths=dims[:, 1],
-                    translations=pos[s] - 0.5 * dims[:, 1:2] * axis, **common))
-            else:
-                rec.log(path, rr.Cylinders3D(radii=dims[:, 0], lengths=dims[:, 1],
-                                             centers=pos[s], **common))
-        s = g.slots["meshes"]
-        keep = posed[s]
-        if not self._clear_if_empty("world/bodies/meshes", "meshes", int(keep.sum())):
-            self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 0)
-            return
+            p, q, c = pos[s], quat[s], colors[s]
+            last = self._last.get(name)
+            fresh = last is None or last[0] is not g or not np.array_equal(last[1], keep)
+            moved = fresh or not (np.array_equal(last[2], p) and np.array_equal(last[3], q))
+            recolour = fresh or not np.array_equal(last[4], c)
+            if not (moved or recolour):
+                continue
+            self._last[name] = (g, keep, p.copy(), q.copy(), c)
+            if name == "meshes":
+                self._log_meshes(g, s, keep, p, q, c, fresh, moved, recolour)
+                continue
+            fields = {}
+            if fresh:
+                dims = g.dims[name][keep]
+                fields = dict(labels=[n for n, k in zip(g.names[name], keep) if k],
+                              fill_mode="solid")
+                if name in ("ellipsoids", "boxes"):
+                    fields["half_sizes"] = dims
+                else:
+                    fields["radii"], fields["lengths"] = dims[:, 0], dims[:, 1]
+            if recolour:
+                fields["colors"] = c
+            if moved:
+                fields["quaternions"] = q
+                if name == "capsules":
+                    # rerun places a capsule's end at the translation, extending along +z
+                    axis = quat_matrices(q)[:, :, 2]
+                    half = 0.5 * g.dims[name][keep][:, 1:2]
+                    fields["translations"] = p - half * axis
+                else:
+                    fields["centers"] = p
+            kind = {"ellipsoids": rr.Ellipsoids3D, "boxes": rr.Boxes3D,
+                    "capsules": rr.Capsules3D, "cylinders": rr.Cylinders3D}[name]
+            rec.log(path, kind.from_fields(**fields))
+
+    def _log_meshes(self, g, s, keep, p, q, c, fresh, moved, recolour):
+        rr, rec = self._rr, self.rec
         on = keep[g.mesh_owner]
-        tris = g.mesh_tris
-        if not keep.all():                 # drop unposed bodies' vertices and triangles
-            new_index = np.cumsum(on) - 1
-            tris = new_index[tris[on[tris].all(axis=1)]].astype(np.uint32)
         owner = g.mesh_owner[on]
-        r = quat_matrices(quat[s])
-        world = (np.einsum("vij,vj->vi", r[owner], g.mesh_local[on]) + pos[s][owner])
-        rec.log("world/bodies/meshes", rr.Mesh3D(vertex_positions=world,
-                                                 triangle_indices=tris,
-                                                 vertex_colors=colors[s][owner]))
-        self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 1)
-        rec.log("world/bodies/mesh_names", rr.Points3D(
-            pos[s[keep]], radii=0.0, labels=[n for n, k in zip(g.names["meshes"], keep)
-                                             if k]))
+        fields = {}
+        if fresh:
+            tris = g.mesh_tris
+            if not keep.all():             # drop unposed bodies' vertices and triangles
+                new_index = np.cumsum(on) - 1
+                tris = new_index[tris[on[tris].all(axis=1)]].astype(np.uint32)
+            fields["triangle_indices"] = tris
+            self._clear_if_empty("world/bodies/mesh_names", "mesh_names", 1)
+            rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(
+                labels=[n for n, k in zip(g.names["meshes"], keep) if k], radii=0.0))
+        if moved:
+            r = quat_matrices(q)
+            world = np.matmul(g.mesh_local[keep], r.transpose(0, 2, 1)) + p[:, None, :]
+            fields["vertex_positions"] = world[g.mesh_valid[keep]]
+            rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(positions=p))
+        if recolour:
+            fields["vertex_colors"] = c[owner]
+        rec.log("world/bodies/meshes", rr.Mesh3D.from_fields(**fields))
 
     def _log_contacts(self, res):
         rr, rec = self._rr, self.rec
@@ -378,15 +415,13 @@ class RerunLog:
             rec.log("tables/contacts", rr.TextDocument("no contacts",
                                                        media_type="text/markdown"))
             return
-        names = np.array([x if x is not None else "?" for x in res.names], dtype=object)
-        labels = (names[res.body_a] + "-" + names[res.body_b] + " #"
-                  + res.contact_id.astype(str).astype(object))
+        names = res.names
         rec.log("world/contacts",
                 rr.Points3D(res.position, radii=self.point_size, colors=CONTACT,
-                            labels=labels.tolist()),
-                rr.AnyValues(contact_id=res.contact_id, body_a=names[res.body_a].tolist(),
-                             body_b=names[res.body_b].tolist(), age=res.age,
-                             depth=res.depth, method=res.method, status=res.status))
+                            labels=self._labels(names, res)),
+                rr.AnyValues(contact_id=res.contact_id, body_a=res.body_a,
+                             body_b=res.body_b, age=res.age, depth=res.depth,
+                             method=res.method, status=res.status))
         rec.log("world/normals", rr.Arrows3D(
             origins=res.position,
             vectors=res.normal * (self.normal_length + res.depth)[:, None],
@@ -399,19 +434,34 @@ class RerunLog:
         rec.log("tables/contacts", rr.TextDocument(
             _markdown_table(names, res, self.table_rows), media_type="text/markdown"))
 
+    def _labels(self, names, res):
+        """"a-b #id" per contact, each made once for the life of its contact id."""
+        cache = self._label_of
+        if len(cache) > 4 * len(res.contact_id) + 1024:
+            keep = set(res.contact_id.tolist())
+            self._label_of = cache = {i: t for i, t in cache.items() if i in keep}
+        out = []
+        for i, a, b in zip(res.contact_id.tolist(), res.body_a.tolist(),
+                           res.body_b.tolist()):
+            text = cache.get(i)
+            if text is None:
+                text = cache[i] = f"{names[a]}-{names[b]} #{i}"
+            out.append(text)
+        return out
+
     def _log_events(self, res):
         ev = res.events
-        if not len(ev):
+        changed = np.flatnonzero(ev.kind != EV_PERSISTED)
+        if not len(changed):
             return
         names = res.names
         lines = []
-        for kind, a, b, cid in ev:
-            if kind == "persisted":
-                continue
+        for kind, a, b, cid in zip(KIND_NAMES[ev.kind[changed]].tolist(),
+                                   ev.body_a[changed].tolist(), ev.body_b[changed].tolist(),
+                                   ev.contact_id[changed].tolist()):
             what = "pair" if cid < 0 else f"contact #{cid}"
             lines.append(f"{kind} {names[a]}-{names[b]} {what}")
-        if lines:
-            self.rec.log("events", self._rr.TextLog("\n".join(lines), level="INFO"))
+        self.rec.log("events", self._rr.TextLog("\n".join(lines), level="INFO"))
 
     def _log_series(self, res, latency):
         rr, rec = self._rr, self.rec
@@ -527,3 +577,19 @@ def read_recording(path):
 def rgba(packed):
     """A packed 0xRRGGBBAA colour as an (r, g, b, a) tuple."""
     return tuple(int(packed) >> s & 0xFF for s in (24, 16, 8, 0))
+
+
+def latest_at(rows, step, column):
+    """What a viewer shows of ``column`` at ``step``: its value in the last of ``rows``
+    (one entity's, from read_recording) logged at or before that step that has it
+    (static rows count as before every step); None when there is none, or when a Clear
+    came later."""
+    value = None
+    for r in rows:
+        if r.get("step", -1) > step:
+            break
+        if "Clear:is_recursive" in r:
+            value = None
+        elif column in r:
+            value = r[column]
+    return value

@@ -13,8 +13,8 @@ import pytest
 from mkcollision_ros.arbiters import quat_matrices
 from mkcollision_ros.meshes import shape_mesh
 from mkcollision_ros.pipeline import Pipeline
-from mkcollision_ros.rerun_log import (DEEP, FREE, TOUCHING, RerunLog, Sink, parse_pairs,
-                                       parse_sink, read_recording, rgba)
+from mkcollision_ros.rerun_log import (DEEP, FREE, TOUCHING, RerunLog, Sink, latest_at,
+                                       parse_pairs, parse_sink, read_recording, rgba)
 from oracles import quat_axis
 
 ROCK = np.random.default_rng(3).normal(size=(12, 3)) * 0.3
@@ -101,6 +101,12 @@ def recorded(tmp_path_factory):
     return read_recording(path), steps
 
 
+def shown(rows, k):
+    """Every column of one entity as a viewer shows it at step k (latest-at)."""
+    cols = {c for r in rows for c in r if ":" in c}
+    return {c: latest_at(rows, k, c) for c in cols}
+
+
 def at_step(rows, k):
     got = [r for r in rows if r.get("step") == k]
     assert got, f"nothing logged at step {k}"
@@ -110,27 +116,27 @@ def at_step(rows, k):
 def test_every_body_is_its_shape_in_slot_order(recorded):
     rec, steps = recorded
     pos, quat, _ = steps[0]
-    ell = at_step(rec["/world/bodies/ellipsoids"], 1)
+    ell = shown(rec["/world/bodies/ellipsoids"], 1)
     assert ell["Ellipsoids3D:labels"] == ["ball", "egg"]
     np.testing.assert_allclose(ell["Ellipsoids3D:half_sizes"], [[0.5] * 3, [0.3, 0.4, 0.6]])
     np.testing.assert_allclose(ell["Ellipsoids3D:centers"], pos[1:3], atol=1e-6)
     np.testing.assert_allclose(np.abs(ell["Ellipsoids3D:quaternions"]),
                                np.abs(quat[1:3]), atol=1e-6)
-    box = at_step(rec["/world/bodies/boxes"], 1)
+    box = shown(rec["/world/bodies/boxes"], 1)
     assert box["Boxes3D:labels"] == ["crate"]
     np.testing.assert_allclose(box["Boxes3D:half_sizes"], [[0.5] * 3])
     # a capsule's end at its translation, the capsule along +z of its rotation
-    cap = at_step(rec["/world/bodies/capsules"], 1)
+    cap = shown(rec["/world/bodies/capsules"], 1)
     axis = quat_matrices(quat[4:5])[0, :, 2]
     np.testing.assert_allclose(np.array(cap["Capsules3D:translations"][0]) + 0.4 * axis,
                                pos[4], atol=1e-6)
     assert cap["Capsules3D:lengths"] == [pytest.approx(0.8)]
-    cyl = at_step(rec["/world/bodies/cylinders"], 1)    # grown by its 1 cm margin
+    cyl = shown(rec["/world/bodies/cylinders"], 1)    # grown by its 1 cm margin
     assert cyl["Cylinders3D:radii"] == [pytest.approx(0.31)]
     assert cyl["Cylinders3D:lengths"] == [pytest.approx(0.82)]
     # cone, rock and floor as one mesh: each body's mesh moved to its pose
-    mesh = at_step(rec["/world/bodies/meshes"], 1)
-    names = at_step(rec["/world/bodies/mesh_names"], 1)
+    mesh = shown(rec["/world/bodies/meshes"], 1)
+    names = shown(rec["/world/bodies/mesh_names"], 1)
     assert names["Points3D:labels"] == ["floor", "cone", "rock"]
     v = np.array(mesh["Mesh3D:vertex_positions"])
     want = []
@@ -149,8 +155,8 @@ def test_colours_follow_the_contact_state(recorded):
     rec, steps = recorded
     colour = {}
     for k in range(1, 5):
-        ell = at_step(rec["/world/bodies/ellipsoids"], k)
-        box = at_step(rec["/world/bodies/boxes"], k)
+        ell = shown(rec["/world/bodies/ellipsoids"], k)
+        box = shown(rec["/world/bodies/boxes"], k)
         colour[k] = (rgba(ell["Ellipsoids3D:colors"][0]), rgba(box["Boxes3D:colors"][0]),
                      rgba(ell["Ellipsoids3D:colors"][1]))
     assert colour[1] == (FREE, FREE, FREE)
@@ -219,10 +225,10 @@ def test_scene_edits_change_what_is_drawn(tmp_path):
     p.step()
     p.close()
     rec = read_recording(path)
-    assert at_step(rec["/world/bodies/ellipsoids"], 1)["Ellipsoids3D:labels"] \
+    assert latest_at(rec["/world/bodies/ellipsoids"], 1, "Ellipsoids3D:labels") \
         == ["ball", "egg"]
-    assert at_step(rec["/world/bodies/ellipsoids"], 2)["Ellipsoids3D:labels"] == ["ball"]
-    assert at_step(rec["/world/bodies/capsules"], 2)["Capsules3D:labels"] == ["rod"]
+    assert latest_at(rec["/world/bodies/ellipsoids"], 2, "Ellipsoids3D:labels") == ["ball"]
+    assert latest_at(rec["/world/bodies/capsules"], 2, "Capsules3D:labels") == ["rod"]
 
 
 def _listening(port):

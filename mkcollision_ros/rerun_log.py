@@ -290,7 +290,9 @@ class RerunLog:
                   for a, b in self.pairs]
         shares = [3, 2] + [2] * len(self.pairs)
         return rrb.Blueprint(rrb.Horizontal(*views, column_shares=shares),
-                             collapse_panels=True)
+                             rrb.BlueprintPanel(state="collapsed"),
+                             rrb.SelectionPanel(state="collapsed"),
+                             rrb.TimePanel(state="expanded"))
 
     def close(self):
         """Flush and close the sink; stop the web viewer."""
@@ -572,6 +574,25 @@ def read_recording(path):
     for rows in out.values():
         rows.sort(key=lambda r: (r.get("step", -1), r.get("iteration", -1)))
     return out
+
+
+def read_blueprint_views(path):
+    """The views of a recording's blueprint: [(kind, origin, name), ...], kind as rerun
+    names it ("3D", "TimeSeries", "TextDocument", "TextLog", ...)."""
+    from rerun.chunk import RrdReader
+    reader = RrdReader(str(path))
+    views = []
+    for store in reader.blueprints():
+        for chunk in reader.stream(store=store).to_chunks():
+            rb = chunk.to_record_batch()
+            if "ViewBlueprint:class_identifier" not in rb.schema.names:
+                continue
+            row = {c: rb.column(c).to_pylist() for c in (
+                "ViewBlueprint:class_identifier", "ViewBlueprint:space_origin",
+                "ViewBlueprint:display_name")}
+            for kind, origin, name in zip(*row.values()):
+                views.append((kind[0], origin[0], name[0]))
+    return views
 
 
 def rgba(packed):

@@ -14,7 +14,8 @@ from mkcollision_ros.arbiters import quat_matrices
 from mkcollision_ros.meshes import shape_mesh
 from mkcollision_ros.pipeline import Pipeline
 from mkcollision_ros.rerun_log import (DEEP, FREE, TOUCHING, RerunLog, Sink, latest_at,
-                                       parse_pairs, parse_sink, read_recording, rgba)
+                                       parse_pairs, parse_sink, read_blueprint_views,
+                                       read_recording, rgba)
 from oracles import quat_axis
 
 ROCK = np.random.default_rng(3).normal(size=(12, 3)) * 0.3
@@ -83,9 +84,14 @@ def test_off_never_imports_rerun():
 
 
 @pytest.fixture(scope="module")
-def recorded(tmp_path_factory):
+def recording_path(tmp_path_factory):
+    return tmp_path_factory.mktemp("rerun") / "steps.rrd"
+
+
+@pytest.fixture(scope="module")
+def recorded(recording_path):
     """Four steps of BODIES logged to a file, with their StepResults."""
-    path = tmp_path_factory.mktemp("rerun") / "steps.rrd"
+    path = recording_path
     p = Pipeline(BODIES, rerun=f"save:{path}")
     rng = np.random.default_rng(11)
     steps = []
@@ -211,6 +217,12 @@ def test_events_and_series(recorded):
     assert names["SeriesLines:names"] == ["step"] + list(steps[0][2].timings)
     stamps = [at_step(rec["/stats"], k)["stamp"] for k in range(1, 5)]
     assert stamps == [int(round(1e9 * (100.0 + 0.5 * k))) for k in range(4)]
+
+
+def test_the_blueprint_lays_out_every_view(recorded, recording_path):
+    views = {(kind, origin) for kind, origin, _ in read_blueprint_views(recording_path)}
+    assert views == {("3D", "world"), ("TimeSeries", "stats"), ("TimeSeries", "timing"),
+                     ("TextDocument", "tables/contacts"), ("TextLog", "events")}
 
 
 def test_scene_edits_change_what_is_drawn(tmp_path):

@@ -557,10 +557,16 @@ def read_recording(path):
     order, each row a dict column -> value (timelines as int64: sequences, and
     nanoseconds for stamps; components as lists, one entry per instance; colours as
     packed 0xRRGGBBAA).  Static rows have no timeline columns."""
+    import warnings
+
     import pyarrow as pa
     from rerun.chunk import RrdReader
     out = {}
-    for chunk in RrdReader(str(path)).stream().to_chunks():
+    with warnings.catch_warnings():
+        # a file a viewer saved while receiving has no footer: read whole, as it is
+        warnings.simplefilter("ignore")
+        reader = RrdReader(str(path))
+    for chunk in reader.stream().to_chunks():
         rb = chunk.to_record_batch()
         cols = {}
         for name, col in zip(rb.schema.names, rb.columns):

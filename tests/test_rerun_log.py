@@ -283,3 +283,32 @@ def test_serve_binds_loopback_with_a_web_viewer():
     assert viewer.poll() is not None            # the web viewer stopped with the log
     with pytest.raises(ProcessLookupError):
         os.killpg(viewer.pid, 0)
+
+
+def test_connect_streams_to_a_running_viewer(tmp_path):
+    """A `rerun` process listening on loopback saves what it receives; the steps logged
+    through connect:<url> arrive in it."""
+    port, received = _free_port(), tmp_path / "received.rrd"
+    server = subprocess.Popen(["rerun", "--bind", "127.0.0.1", "--port", str(port),
+                               "--save", str(received)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        end = time.monotonic() + 30
+        while not _listening(port) and time.monotonic() < end:
+            time.sleep(0.1)
+        assert _listening(port) == ["127.0.0.1"]
+        p = Pipeline(BODIES[1:4], rerun=f"connect:rerun+http://127.0.0.1:{port}/proxy")
+        q = np.tile([0.0, 0, 0, 1], (3, 1))
+        for k in range(3):
+            p.step(np.array([[0.0, 0, 0], [5, 0, 0], [0.9, 0, 0]]), q, float(k))
+        p.close()
+        rows = []
+        while len(rows) < 3 and time.monotonic() < end:
+            time.sleep(0.2)
+            if received.exists():
+                rows = read_recording(received).get("/world/contacts", [])
+        assert [r["step"] for r in rows] == [1, 2, 3]
+        assert all(r["depth"] == [pytest.approx(0.1)] for r in rows)
+    finally:
+        from mkcollision_ros.rerun_log import _stop_group
+        _stop_group(server)

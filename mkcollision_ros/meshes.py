@@ -4,9 +4,9 @@ Every mesh is in the body frame, metres, with outward-wound triangles:
   cone        its base rim (``RIM`` points), the tip and the base centre: exact up to
               the rim's polygon
   cylinder    two rims and two cap centres
-  plane       a square patch ``PLANE_SIZE`` m wide on the plane, centred on the point
-              of the plane nearest the body origin, both sides wound (visible from
-              either side)
+  plane       a square patch (``PLANE_SIZE`` m wide unless the caller sizes it) on the
+              plane, centred on its point nearest the body origin (or a chosen point),
+              both sides wound (visible from either side)
   others      support points along the directions of a subdivided icosahedron with
               the icosahedron's triangles (a convex hull, capsule, sphere, ellipsoid
               or box: a picture, coarse where the shape has edges)
@@ -113,13 +113,15 @@ def _band(lo, hi, n):
                            np.stack([lo + i, hi + j, hi + i], axis=1)])
 
 
-def plane_patch(normal, offset, size=PLANE_SIZE):
-    """Vertices (4, 3) and triangles (4, 3), both sides, of a square patch of the plane
-    n.x = offset (n need not be unit), centred on its point nearest the origin."""
+def plane_patch(normal, offset, size=PLANE_SIZE, near=(0.0, 0.0, 0.0)):
+    """Vertices (4, 3) and triangles (4, 3), both sides, of a square patch ``size`` m
+    wide of the plane n.x = offset (n need not be unit), centred on its point nearest
+    ``near`` (body frame)."""
     n = np.asarray(normal, float)
     length = np.linalg.norm(n)
     n = n / length
-    c = (float(offset) / length) * n
+    p = np.asarray(near, float)
+    c = p + (float(offset) / length - p @ n) * n
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     e1 = np.cross(n, helper)
     e1 /= np.linalg.norm(e1)
@@ -131,14 +133,16 @@ def plane_patch(normal, offset, size=PLANE_SIZE):
     return v, f
 
 
-def shape_mesh(shape, verts=None, levels=1):
+def shape_mesh(shape, verts=None, levels=1, plane_size=PLANE_SIZE,
+               plane_near=(0.0, 0.0, 0.0)):
     """(vertices float64 (V, 3), triangles int64 (F, 3)) of a ``shape`` dict in its body
     frame (module docstring); ``verts``: a convex shape's stored points (M, 3);
-    ``levels``: the icosahedron's subdivisions for the support-point meshes."""
+    ``levels``: the icosahedron's subdivisions for the support-point meshes; a plane's
+    patch is ``plane_size`` wide around its point nearest ``plane_near`` (body frame)."""
     kind = shape["type"]
     m = float(shape.get("margin", 0.0))
     if kind == "plane":
-        return plane_patch(shape["normal"], shape["offset"])
+        return plane_patch(shape["normal"], shape["offset"], plane_size, plane_near)
     if kind in ("cone", "cylinder"):
         r, h = float(shape["radius"]) + m, 0.5 * float(shape["height"]) + m
         if kind == "cone":

@@ -23,8 +23,11 @@ time: a timestamp when it is a date after 1973, else a duration)):
                               body in slot order, labelled with its name, coloured free /
                               touching / deep (FREE, TOUCHING, DEEP; deep: a contact
                               deeper than ``deep`` m); spheres are ellipsoids
-  world/bodies/meshes         cones, convex hulls and planes (a PLANE_SIZE patch) as one
-                              mesh (meshes.shape_mesh), vertex colours by state
+  world/bodies/meshes         cones, convex hulls and planes as one mesh
+                              (meshes.shape_mesh), vertex colours by state; a plane is
+                              a square patch spanning the bounded bodies (sized on each
+                              scene edit), always PLANE-coloured: a floor touches
+                              nearly everything, and red would hide the bodies' states
   world/bodies/mesh_names     the meshes' names, as labels at their body origins
   world/contacts              contact positions labelled "a-b #id"; beside them, per
                               instance: contact_id, body_a, body_b (slots), age, depth,
@@ -55,7 +58,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .arbiters import EV_PERSISTED, KIND_NAMES, quat_matrices
-from .kernels.constants import METHOD_NAMES
+from .kernels.constants import METHOD_NAMES, P_RADIUS
 from .meshes import shape_mesh
 from .results import Status
 
@@ -64,6 +67,7 @@ STATUS_NAMES = tuple(s.name.lower() for s in sorted(Status))
 FREE = (150, 150, 150, 255)
 TOUCHING = (255, 150, 0, 255)
 DEEP = (230, 20, 20, 255)
+PLANE = (90, 100, 110, 255)
 CONTACT = (30, 80, 255, 255)
 NORMAL = (0, 200, 60, 255)
 WITNESS_A = (255, 0, 255, 255)
@@ -155,14 +159,27 @@ class _Groups(NamedTuple):
     mesh_valid: np.ndarray    # bool (M, K): the real ones (row-major: the mesh's order)
     mesh_owner: np.ndarray    # int64 (V,) index into slots["meshes"]
     mesh_tris: np.ndarray     # uint32 (F, 3)
+    mesh_plane: np.ndarray    # bool (M,): the mesh is a plane's patch (drawn PLANE)
+
+
+def _plane_extent(scene):
+    """(centre (3,), side m) of a plane patch that spans the posed bounded bodies."""
+    bounded = scene.posed & ~scene.is_plane
+    if not bounded.any():
+        return np.zeros(3), 2.0
+    p = scene.positions[bounded]
+    r = float(scene.table.params[:len(scene.names)][bounded, P_RADIUS].max())
+    lo, hi = p.min(axis=0) - r, p.max(axis=0) + r
+    return 0.5 * (lo + hi), max(2.0, 1.2 * float(np.max(hi - lo)))
 
 
 def _groups(scene):
     slots = {g: [] for g in ("ellipsoids", "boxes", "capsules", "cylinders", "meshes")}
     names = {g: [] for g in slots}
     dims = {g: [] for g in slots}
-    local, owner, tris, base = [], [], [], 0
+    local, owner, tris, base, planes = [], [], [], 0, []
     table = scene.table
+    centre, side = _plane_extent(scene)
     for body in scene.bodies():
         slot = scene.index[body.name]
         s = body.shape
@@ -182,7 +199,11 @@ def _groups(scene):
             dims[g].append((float(s["radius"]) + m, float(s["height"]) + 2.0 * m))
         else:
             first, count = table.vrange[slot]
-            v, f = shape_mesh(s, table.verts[first:first + count])
+            r = quat_matrices(scene.orientations[slot:slot + 1])[0]
+            near = r.T @ (centre - scene.positions[slot])   # the scene's centre, body frame
+            v, f = shape_mesh(s, table.verts[first:first + count], plane_size=side,
+                              plane_near=near)
+            planes.append(s["type"] == "plane")
             local.append(v)
             owner.append(np.full(len(v), len(slots[g]) - 1))
             tris.append(f + base)
@@ -196,7 +217,8 @@ def _groups(scene):
         pad[i, :len(v)], valid[i, :len(v)] = v, True
     return _Groups({g: np.array(v, np.int64) for g, v in slots.items()}, names,
                    {g: np.array(v, float) for g, v in dims.items()}, pad, valid,
-                   cat(owner, (0,), np.int64), cat(tris, (0, 3), np.uint32))
+                   cat(owner, (0,), np.int64), cat(tris, (0, 3), np.uint32),
+                   np.array(planes, bool))
 
 
 def _markdown_table(names, res, rows):
@@ -278,7 +300,8 @@ class RerunLog:
         return where
 
     def blueprint(self):
-        """The layout: 3D scene | series, table, events | one view per chosen pair."""
+        """The layout: 3D scene | series, table, events | one view per chosen pair; the
+        time panel as a bar (play, step, scrub), the side panels collapsed."""
         rrb = self._rrb
         side = rrb.Vertical(
             rrb.TimeSeriesView(origin="stats", name="contacts"),
@@ -292,7 +315,7 @@ class RerunLog:
         return rrb.Blueprint(rrb.Horizontal(*views, column_shares=shares),
                              rrb.BlueprintPanel(state="collapsed"),
                              rrb.SelectionPanel(state="collapsed"),
-                             rrb.TimePanel(state="expanded"))
+                             rrb.TimePanel(state="collapsed"))
 
     def close(self):
         """Flush and close the sink; stop the web viewer."""
@@ -405,6 +428,8 @@ class RerunLog:
             fields["vertex_positions"] = world[g.mesh_valid[keep]]
             rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(positions=p))
         if recolour:
+            c = c.copy()
+            c[g.mesh_plane[keep]] = _packed(PLANE)
             fields["vertex_colors"] = c[owner]
         rec.log("world/bodies/meshes", rr.Mesh3D.from_fields(**fields))
 

@@ -13,9 +13,9 @@ import pytest
 from mkcollision_ros.arbiters import quat_matrices
 from mkcollision_ros.meshes import shape_mesh
 from mkcollision_ros.pipeline import Pipeline
-from mkcollision_ros.rerun_log import (DEEP, FREE, TOUCHING, RerunLog, Sink, latest_at,
-                                       parse_pairs, parse_sink, read_blueprint_views,
-                                       read_recording, rgba)
+from mkcollision_ros.rerun_log import (DEEP, FREE, PLANE, TOUCHING, RerunLog, Sink,
+                                       latest_at, parse_pairs, parse_sink,
+                                       read_blueprint_views, read_recording, rgba)
 from oracles import quat_axis
 
 ROCK = np.random.default_rng(3).normal(size=(12, 3)) * 0.3
@@ -146,13 +146,20 @@ def test_every_body_is_its_shape_in_slot_order(recorded):
     assert names["Points3D:labels"] == ["floor", "cone", "rock"]
     v = np.array(mesh["Mesh3D:vertex_positions"])
     want = []
-    for i in (0, 6, 7):
+    for i in (6, 7):
         s = BODIES[i]["shape"]
         local, _ = shape_mesh(s, ROCK if s["type"] == "convex" else None)
         want.append(local @ quat_matrices(quat[i:i + 1])[0].T + pos[i])
     want = np.concatenate(want)
-    assert v.shape == want.shape
-    np.testing.assert_allclose(v, want, atol=1e-5 * max(1.0, np.abs(want).max()))
+    assert v.shape == (4 + len(want), 3)
+    np.testing.assert_allclose(v[4:], want, atol=1e-5 * max(1.0, np.abs(want).max()))
+    # the floor: a square patch on z = 0 under every bounded body, in its own colour
+    floor = v[:4]
+    assert np.all(floor[:, 2] == 0.0)
+    assert floor[:, 0].min() < pos[1:, 0].min() and floor[:, 0].max() > pos[1:, 0].max()
+    assert floor[:, 1].min() < pos[1:, 1].min() and floor[:, 1].max() > pos[1:, 1].max()
+    colours = [rgba(c) for c in mesh["Mesh3D:vertex_colors"]]
+    assert colours[:4] == [PLANE] * 4 and colours[4] == FREE
     tris = np.array(mesh["Mesh3D:triangle_indices"])
     assert tris.min() == 0 and tris.max() == len(v) - 1
 

@@ -34,7 +34,7 @@ time: a timestamp when it is a date after 1973, else a duration)):
                               method, status (codes: constants.M_*, ST_*; rr.AnyValues)
   world/normals               an arrow per contact along the normal, normal_length +
                               depth long
-  world/witness               the witness points, point_a then point_b for each contact
+  world/witness/{a,b}         the witness points on A and on B, one per contact
   tables/contacts             the contacts as a markdown table (pair, id, age, depth,
                               normal, method, status), the deepest ``table_rows`` first
   events                      one text entry per step with events: began / ended pairs
@@ -268,6 +268,7 @@ class RerunLog:
         self._logged = set()         # groups with instances at the last step
         self._last = {}              # group -> (groups, posed, positions, quats, colours)
         self._label_of = {}          # contact id -> its label
+        self._styled = False         # the contacts' static colours and sizes are sent
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log("stats", rr.SeriesLines(names=["contacts", "touching pairs",
                                                     "candidate pairs"]), static=True)
@@ -436,28 +437,34 @@ class RerunLog:
     def _log_contacts(self, res):
         rr, rec = self._rr, self.rec
         n = len(res.depth)
-        for path in ("world/contacts", "world/normals", "world/witness"):
+        for path in ("world/contacts", "world/normals", "world/witness/a",
+                     "world/witness/b"):
             self._clear_if_empty(path, path, n)
         if not n:
             rec.log("tables/contacts", rr.TextDocument("no contacts",
                                                        media_type="text/markdown"))
             return
+        if not self._styled:       # one colour and size each: static, sent once
+            self._styled = True
+            rec.log("world/contacts", rr.Points3D.from_fields(
+                radii=self.point_size, colors=CONTACT), static=True)
+            rec.log("world/normals", rr.Arrows3D.from_fields(
+                radii=0.25 * self.point_size, colors=NORMAL), static=True)
+            for side, colour in (("a", WITNESS_A), ("b", WITNESS_B)):
+                rec.log(f"world/witness/{side}", rr.Points3D.from_fields(
+                    radii=0.5 * self.point_size, colors=colour), static=True)
         names = res.names
         rec.log("world/contacts",
-                rr.Points3D(res.position, radii=self.point_size, colors=CONTACT,
-                            labels=self._labels(names, res)),
+                rr.Points3D.from_fields(positions=res.position,
+                                        labels=self._labels(names, res)),
                 rr.AnyValues(contact_id=res.contact_id, body_a=res.body_a,
                              body_b=res.body_b, age=res.age, depth=res.depth,
                              method=res.method, status=res.status))
-        rec.log("world/normals", rr.Arrows3D(
+        rec.log("world/normals", rr.Arrows3D.from_fields(
             origins=res.position,
-            vectors=res.normal * (self.normal_length + res.depth)[:, None],
-            colors=NORMAL, radii=0.25 * self.point_size))
-        witness = np.concatenate([res.point_a, res.point_b])
-        colors = np.empty((2 * n, 4), np.uint8)
-        colors[:n], colors[n:] = WITNESS_A, WITNESS_B
-        rec.log("world/witness", rr.Points3D(witness, radii=0.5 * self.point_size,
-                                             colors=colors))
+            vectors=res.normal * (self.normal_length + res.depth)[:, None]))
+        rec.log("world/witness/a", rr.Points3D.from_fields(positions=res.point_a))
+        rec.log("world/witness/b", rr.Points3D.from_fields(positions=res.point_b))
         rec.log("tables/contacts", rr.TextDocument(
             _markdown_table(names, res, self.table_rows), media_type="text/markdown"))
 

@@ -19,8 +19,8 @@ import tempfile
 import time
 
 from .config import bodies_from_params, load_params_file
-from .demo_scenes import (SCENE_NAMES, _body, demo_poses, make_scene, note_contacts, swarm,
-                          write_params)
+from .demo_scenes import (SCENE_NAMES, Scene, _body, demo_poses, make_scene, note_contacts,
+                          swarm, write_params)
 
 __all__ = ["demo_poses", "run", "main", "publisher_main", "scene_params_file"]
 DEFAULT_SCENE = "bowling"
@@ -70,10 +70,15 @@ def die_with_parent():
 
 
 def prepare(scene_name, bodies=None, params_file=None):
-    """(scene, params file path, temporary file or None) for the demo's arguments.
+    """(scene, params file path, temporary file or None) for the demo's arguments
+    (``scene_name``: a name of SCENE_NAMES, or a demo_scenes.Scene built already).
     ``bodies`` (swarm only) writes a generated params file to a temporary file;
     ``params_file`` (swarm only) orbits that file's bodies.  ValueError when the
     arguments do not fit together."""
+    if isinstance(scene_name, Scene):          # built already
+        if bodies is not None or params_file is not None:
+            raise ValueError("a built scene takes no --bodies or --params-file")
+        return scene_name, scene_params_file(scene_name.name), None
     if scene_name not in SCENE_NAMES:
         raise ValueError(f"unknown scene {scene_name!r}; expected one of "
                          f"{', '.join(SCENE_NAMES)}")
@@ -177,7 +182,8 @@ class ContactTally:
 
 def run(seconds, scene=DEFAULT_SCENE, bodies=None, params_file=None, record=None, rate_hz=30.0,
         step_s=None, node_cmd=None, out=sys.stdout):
-    """Start the node with the scene's params file, play the scene for ``seconds``
+    """Start the node with the params file of ``scene`` (a name, or a demo_scenes.Scene
+    built already), play the scene for ``seconds``
     (wall time at ``rate_hz``; or, with ``step_s``, script time in lockstep: the pose at
     each multiple of ``step_s`` up to ``seconds`` is sent once the node answered the
     previous one), print and return the summary dict.  ``record``: a .rrd file the node

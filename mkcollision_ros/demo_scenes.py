@@ -267,7 +267,7 @@ def dominoes():
 
 # -- stack ---------------------------------------------------------------------------------
 STACK = dict(levels=8, size=(0.16, 0.16, 0.1), ball_r=0.11, throw_from=(-2.4, 0.0, 0.35),
-             hit_height=0.62, flight_s=0.8, push_s=0.12, fall_s=1.1, gap=0.03,
+             hit_height=0.62, flight_s=0.6, push_s=0.12, fall_s=1.1, gap=0.03,
              bounce=0.5)
 
 
@@ -477,9 +477,10 @@ def marbles():
 
 # -- bowling -------------------------------------------------------------------------------
 BOWLING = dict(pin_radii=(0.06, 0.06, 0.19), pin_spacing=0.3048, ball_r=0.108,
-               ball_start=-3.5, ball_y=0.05, ball_speed=3.0, ball_stop=1.5, fall_s=0.6,
-               push_s=0.1, slide_s=0.3, knock_speed=1.5, deflect_deg=45.0,
-               hit_depth=0.003, samples=600, settle_speed=0.3)
+               ball_start=-3.5, ball_y=0.005, ball_speed=3.0, ball_stop=1.5, fall_s=0.6,
+               push_s=0.1, slide_s=0.2, knock_speed=1.5, deflect_deg=45.0,
+               hit_depth=0.003, samples=600, settle_speed=0.3,
+               max_speed=4.5)
 
 
 def _fibonacci(n):
@@ -503,9 +504,9 @@ def bowling():
     from it (slowing down, time constant ``slide_s``), faster than the ball moves along
     that direction; a pin toppling for ``fall_s`` seconds whose surface enters a
     pin by ``hit_depth`` knocks it: that one slides at ``knock_speed`` (or faster than
-    the knocking pin moves toward it) and topples, ``deflect_deg`` off the line between
-    them; pins still entering each other once they slow down part at
-    ``settle_speed``.  The ball pushes again each
+    the knocking pin moves toward it, up to ``max_speed``) and topples, ``deflect_deg`` off the line between
+    them; a toppling pin entering another that is not closing on it speeds that one
+    away by ``settle_speed``.  The ball pushes again each
     pin it enters; past the last row it slows to rest in the pit.  A toppling pin keeps its
     lowest point ``REST`` below the lane: its centre height is the ellipsoid's extent
     along the vertical, sqrt(a^2 sin^2 + c^2 cos^2) of the tilt."""
@@ -583,9 +584,9 @@ def bowling():
                 away = p_i[:2] - ball[k, :2]
                 away /= np.linalg.norm(away)
                 carry = np.array([ball_vel[k], 0.0])
-                by_ball[i] = True
-                if not np.isfinite(t_fall[i]):
+                if not np.isfinite(t_fall[i]):      # a standing pin: the ball knocks it
                     t_fall[i], fall_dir[i] = t, away
+                    by_ball[i] = True
                 push_v[i], push_end[i] = carry, t + c["push_s"]
                 shove(i, t + c["push_s"], away, 1.3 * float(np.dot(carry, away)) + 0.3)
         for i in range(n):        # a toppling pin knocks the pins it enters
@@ -600,15 +601,16 @@ def bowling():
                 if not _inside_ellipsoid(pts, p_i, quat[k, i], shrunk).any():
                     continue
                 if np.isfinite(t_fall[i]) and closing <= 0.0:
-                    if np.linalg.norm(velocity(i, t)) < c["settle_speed"]:
-                        shove(i, t, line, c["settle_speed"])    # lying pins part
+                    slide[i] = velocity(i, t) + c["settle_speed"] * line   # they part
+                    slide_t0[i] = t
                     continue
                 if True:
                     side = math.copysign(sin_d, fall_dir[j][0] * line[1] - fall_dir[j][1] * line[0])
                     d = np.array([cos_d * line[0] - side * line[1],
                                   side * line[0] + cos_d * line[1]])
-                    speed = max(c["knock_speed"],
-                                1.3 * float(np.dot(velocity(j, t), line)) + 0.3)
+                    speed = min(max(c["knock_speed"],
+                                    1.3 * float(np.dot(velocity(j, t), line)) + 0.3),
+                                c["max_speed"])
                     shove(i, t, d, speed)
                     break
     names = [f"pin_{i}" for i in range(n)]

@@ -186,7 +186,7 @@ def run(seconds, scene=DEFAULT_SCENE, bodies=None, params_file=None, record=None
     built already), play the scene for ``seconds``
     (wall time at ``rate_hz``; or, with ``step_s``, script time in lockstep: the pose at
     each multiple of ``step_s`` up to ``seconds`` is sent once the node answered the
-    previous one), print and return the summary dict.  ``record``: a .rrd file the node
+    previous one, and sent again, newly stamped, when no answer comes within 1 s), print and return the summary dict.  ``record``: a .rrd file the node
     records every step to.  The summary's "expected" maps each expectation's label to
     (subjects seen, subjects, the script's count or None); "seen" to the sets."""
     import rclpy
@@ -229,10 +229,13 @@ def run(seconds, scene=DEFAULT_SCENE, bodies=None, params_file=None, record=None
         if step_s:
             k = 0
             while k * step_s <= seconds + 1e-9 and proc.poll() is None:
-                key = pub.publish_at(k * step_s)
-                wait = time.monotonic() + 2.0
-                while key not in tally.answered and time.monotonic() < wait:
-                    executor.spin_once(timeout_sec=0.01)
+                for _ in range(5):        # inputs are best effort: resend a lost one
+                    key = pub.publish_at(k * step_s)
+                    wait = time.monotonic() + 1.0
+                    while key not in tally.answered and time.monotonic() < wait:
+                        executor.spin_once(timeout_sec=0.01)
+                    if key in tally.answered:
+                        break
                 k += 1
             end = time.monotonic() + 0.3          # the last answers
             while time.monotonic() < end:

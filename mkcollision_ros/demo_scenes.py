@@ -110,7 +110,7 @@ class Expect(NamedTuple):
         line = f"{self.label}: {len(seen)} of {len(self.targets)} {self.noun}"
         if self.wanted is None:
             return line
-        return line + (f" (the script makes {self.wanted}: "
+        return line + (f" (the script makes at least {self.wanted}: "
                        f"{'seen' if len(seen) >= self.wanted else 'NOT all seen'})")
 
 
@@ -337,8 +337,8 @@ def stack():
     bodies.append(_body("ball", {"type": "sphere", "radius": r}, p0))
     bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
-    expects = [Expect("ball-tower contacts", "balls", {"ball": frozenset(names[:-1])},
-                      wanted=1),
+    expects = [Expect("ball-tower contacts", "blocks",
+                      {nm: frozenset(["ball"]) for nm in names[:-1]}, wanted=1),
                Expect("blocks on the floor after the fall", "blocks",
                       {nm: frozenset(["floor"]) for nm in names[:-1]}, moved=0.1, wanted=n)]
     return Scene("stack", bodies, names, times, pos, quat, 2.0, expects,

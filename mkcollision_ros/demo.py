@@ -19,8 +19,8 @@ import tempfile
 import time
 
 from .config import bodies_from_params, load_params_file
-from .demo_scenes import (SCENE_NAMES, Scene, _body, demo_poses, make_scene, note_contacts,
-                          swarm, write_params)
+from .demo_scenes import (SCENE_NAMES, Scene, demo_poses, make_scene, note_contacts,
+                          params_body, swarm, write_params)
 
 __all__ = ["demo_poses", "run", "main", "publisher_main", "scene_params_file"]
 DEFAULT_SCENE = "bowling"
@@ -89,7 +89,7 @@ def prepare(scene_name, bodies=None, params_file=None):
         raise ValueError("give --bodies or --params-file, not both")
     if params_file is not None:
         found = bodies_from_params(load_params_file(params_file))
-        scene = swarm(bodies=[_body(b["name"], b["shape"], static=b["static"])
+        scene = swarm(bodies=[params_body(b["name"], b["shape"], static=b["static"])
                               for b in found])
         return scene, os.path.abspath(params_file), None
     scene = make_scene(scene_name, bodies=bodies)

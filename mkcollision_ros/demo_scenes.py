@@ -10,7 +10,7 @@ period ``duration + hold``).
 Scenes (``SCENES``; ``make_scene(name, bodies=None)`` builds one):
 
 bowling   ten pins (ellipsoids 0.12 x 0.12 x 0.38 m, the collision ellipsoids of a pin)
-          in their triangle, a ball (r 0.108 m) rolling into the pocket; pins hit by the
+          in their triangle, a ball (r 0.108 m) rolling into the head pin; pins hit by the
           ball or by a falling pin topple and slide away and lie on the lane.
 dominoes  a row of boxes 0.03 x 0.12 x 0.24 m falling one into the next; each domino
           turns about its front bottom edge until its top edge reaches the next one
@@ -50,16 +50,6 @@ def quat_axis_angle(axis, angle):
     axis = np.asarray(axis, np.float64)
     half = 0.5 * np.asarray(angle, np.float64)
     return np.concatenate([axis * np.sin(half)[..., None], np.cos(half)[..., None]], -1)
-
-
-def quat_mul(a, b):
-    """Hamilton product a * b of quat_xyzw arrays (..., 4)."""
-    ax, ay, az, aw = np.moveaxis(a, -1, 0)
-    bx, by, bz, bw = np.moveaxis(b, -1, 0)
-    return np.stack([aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw,
-                     aw * bw - ax * bx - ay * by - az * bz], -1)
 
 
 def quat_rotate(q, v):
@@ -191,7 +181,8 @@ def _vec(v):
     return [_num(x) for x in v]
 
 
-def _body(name, shape, position=None, orientation=None, static=False):
+def params_body(name, shape, position=None, orientation=None, static=False):
+    """A body of a params file: its name, shape keys, ``static``, initial pose."""
     body = {"name": name, **shape}
     if static:
         body["static"] = True
@@ -255,8 +246,8 @@ def dominoes():
     quat = _y_turn(theta)
     names = [f"domino_{i}" for i in range(n)]
     shape = {"type": "box", "size": [th, c["wide"], h]}
-    bodies = [_body(nm, shape, pos[0, i]) for i, nm in enumerate(names)]
-    bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
+    bodies = [params_body(nm, shape, pos[0, i]) for i, nm in enumerate(names)]
+    bodies.append(params_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
     expects = [Expect("domino-next contacts", "dominoes",
                       {names[i]: frozenset([names[i + 1]]) for i in range(n - 1)},
@@ -332,10 +323,10 @@ def stack():
     names = [f"block_{i}" for i in range(n)] + ["ball"]
     pos = np.concatenate([blocks, ball[:, None, :]], axis=1)
     quat = np.concatenate([bq, _y_turn(spin)[:, None, :]], axis=1)
-    bodies = [_body(nm, {"type": "box", "size": [w, d, h]}, pos[0, i])
+    bodies = [params_body(nm, {"type": "box", "size": [w, d, h]}, pos[0, i])
               for i, nm in enumerate(names[:-1])]
-    bodies.append(_body("ball", {"type": "sphere", "radius": r}, p0))
-    bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
+    bodies.append(params_body("ball", {"type": "sphere", "radius": r}, p0))
+    bodies.append(params_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
     expects = [Expect("ball-tower contacts", "blocks",
                       {nm: frozenset(["ball"]) for nm in names[:-1]}, wanted=1),
@@ -445,15 +436,15 @@ def marbles():
     pos = np.stack([p for p, _ in paths], axis=1)
     quat = np.stack([_y_turn(a) for _, a in paths], axis=1)
     names = [f"marble_{i}" for i in range(n)]
-    bodies = [_body(nm, {"type": "sphere", "radius": r}, pos[0, i])
+    bodies = [params_body(nm, {"type": "sphere", "radius": r}, pos[0, i])
               for i, nm in enumerate(names)]
     plank_names = [f"plank_{j}" for j in range(len(planks))]
     for nm, (_, _, _, length, centre, q) in zip(plank_names, planks):
-        bodies.append(_body(nm, {"type": "box", "size": [length, c["plank_wide"],
+        bodies.append(params_body(nm, {"type": "box", "size": [length, c["plank_wide"],
                                                          c["plank_thick"]]},
                             [centre[0], 0.0, centre[1]], q, static=True))
     tw, xm = c["tray_wide"], 0.5 * (x_lo + x_hi)
-    bodies.append(_body("tray", {"type": "box", "size": [x_hi - x_lo, tw, tray_thick]},
+    bodies.append(params_body("tray", {"type": "box", "size": [x_hi - x_lo, tw, tray_thick]},
                         [xm, 0.0, 0.5 * tray_thick], static=True))
     for nm, size, at in (
             ("tray_wall_far", [wall, tw, wall_h], [x_hi - 0.5 * wall, 0.0,
@@ -464,8 +455,8 @@ def marbles():
              [xm, 0.5 * (tw - wall), tray_thick + 0.5 * wall_h]),
             ("tray_wall_right", [x_hi - x_lo, wall, wall_h],
              [xm, -0.5 * (tw - wall), tray_thick + 0.5 * wall_h])):
-        bodies.append(_body(nm, {"type": "box", "size": size}, at, static=True))
-    bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
+        bodies.append(params_body(nm, {"type": "box", "size": size}, at, static=True))
+    bodies.append(params_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
     expects = [Expect("marble-plank contacts", "marbles",
                       {nm: frozenset(plank_names) for nm in names}, wanted=n),
@@ -617,10 +608,10 @@ def bowling():
     spin = (xb - xb[0]) / rb
     all_pos = np.concatenate([pos, ball[:, None, :]], axis=1)
     all_quat = np.concatenate([quat, _y_turn(spin)[:, None, :]], axis=1)
-    bodies = [_body(nm, {"type": "ellipsoid", "radii": list(c["pin_radii"])}, pos[0, i])
+    bodies = [params_body(nm, {"type": "ellipsoid", "radii": list(c["pin_radii"])}, pos[0, i])
               for i, nm in enumerate(names)]
-    bodies.append(_body("ball", {"type": "sphere", "radius": rb}, ball[0]))
-    bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
+    bodies.append(params_body("ball", {"type": "sphere", "radius": rb}, ball[0]))
+    bodies.append(params_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
     hit = [nm for nm, h in zip(names, by_ball) if h]
     toppled = [nm for nm, tf in zip(names, t_fall) if np.isfinite(tf)]
@@ -683,8 +674,8 @@ def swarm_bodies(n, seed=0):
     bodies = []
     for i in range(int(n)):
         kind, make = SWARM_SHAPES[i % len(SWARM_SHAPES)]
-        bodies.append(_body(f"{kind}_{i}", make(g)))
-    bodies.append(_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
+        bodies.append(params_body(f"{kind}_{i}", make(g)))
+    bodies.append(params_body("floor", {"type": "plane", "normal": [0.0, 0.0, 1.0], "offset": 0.0},
                         static=True))
     return bodies
 
@@ -694,7 +685,7 @@ def shipped_swarm_bodies():
     from .config import bodies_from_params, load_params_file
     path = os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "config",
                         "collision_node.yaml")
-    return [_body(b["name"], b["shape"], static=b["static"])
+    return [params_body(b["name"], b["shape"], static=b["static"])
             for b in bodies_from_params(load_params_file(path))]
 
 

@@ -305,9 +305,11 @@ def _positive(kind):
 
 
 def _parser(description, publisher=False):
+    # the publisher's default fits a node started with config/collision_node.yaml
+    default = "swarm" if publisher else DEFAULT_SCENE
     parser = argparse.ArgumentParser(description=description)
-    parser.add_argument("--scene", choices=SCENE_NAMES, default=DEFAULT_SCENE,
-                        help=f"the scene to play (default {DEFAULT_SCENE})")
+    parser.add_argument("--scene", choices=SCENE_NAMES, default=default,
+                        help=f"the scene to play (default {default})")
     parser.add_argument("--bodies", type=_positive(int), default=None,
                         help="swarm only: generate this many bodies (a temporary params "
                         "file)")
@@ -351,7 +353,8 @@ def main(argv=None):
 
 def publisher_main(argv=None):
     """Only the demo publisher (beside a node started with ``ros2 run ... --params-file
-    config/demo_<scene>.yaml``)."""
+    config/demo_<scene>.yaml``; the default scene, swarm, moves the bodies of
+    config/collision_node.yaml)."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
 

@@ -26,6 +26,7 @@ setup(
             f"collision_node = {PACKAGE}.node:main",
             f"demo_publisher = {PACKAGE}.demo:publisher_main",
             f"demo = {PACKAGE}.demo:main",
+            f"render_recording = {PACKAGE}.render:main",
         ],
     },
 )

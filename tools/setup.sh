@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up everything on a machine without ROS: a venv with the pinned ROS 2 Jazzy wheels,
-# numba, rerun and the test peers; then build the message package and this package with
+# numba, rerun and the test peers; the Debian packages that draw pictures without a display
+# (Mesa's software Vulkan driver, for `render_recording`); then build the message package and this package with
 # colcon into ./install.  Idempotent: a second run only checks and exits in seconds.
 #
 #   bash tools/setup.sh            set up (or check) everything
@@ -39,6 +40,29 @@ elif [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   echo "$want" > "$stamp"
 else
   log "python packages up to date"
+fi
+
+# Pictures without a display: rerun's headless viewer draws with Vulkan, on a machine
+# without a GPU through Mesa's software driver (lavapipe) from mesa-vulkan-drivers.
+APT_PKGS=(mesa-vulkan-drivers)
+missing=()
+for pkg in "${APT_PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed" || missing+=("$pkg")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  log "debian packages present (${APT_PKGS[*]})"
+elif [ "$(id -u)" -ne 0 ] || ! command -v apt-get >/dev/null; then
+  log "missing debian packages: ${missing[*]} (rendering needs them): run as root, or: sudo apt-get install ${missing[*]}"
+else
+  log "installing debian packages: ${missing[*]}"
+  mkdir -p log
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get install -y -q --no-install-recommends "${missing[@]}" > log/apt-get.txt 2>&1 || {
+    log "apt-get install failed; updating the package lists and retrying"
+    apt-get update -q >> log/apt-get.txt 2>&1
+    apt-get install -y -q --no-install-recommends "${missing[@]}" >> log/apt-get.txt 2>&1 || {
+      tail -20 log/apt-get.txt; echo "apt-get install ${missing[*]} failed: see log/apt-get.txt"; exit 1; }
+  }
 fi
 
 # The message wheels' exported CMake targets name the include folders of the machine

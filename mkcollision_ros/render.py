@@ -1,36 +1,34 @@
 """Render a rerun recording, or a live rerun source, to a PNG image without a display.
 
 ``python -m mkcollision_ros.render <recording.rrd | rerun+http://host:port/proxy>
---out shot.png [--size 1280x800] [--timeout 60] [--blueprint layout.rbl]``
-(console script ``render_recording``) runs rerun's native viewer headless on a software
-Vulkan driver and saves one screenshot of the whole viewer window.
+--out shot.png [--size 1280x800] [--time step=last] [--blueprint layout.rbl]
+[--view] [--timeout 60] [--settle 3]`` (console script ``render_recording``) runs
+rerun's native viewer headless on a software Vulkan driver, drives it through its
+control API (``rerun.experimental.ViewerClient``): waits until the data has loaded,
+places the time cursor, and saves one screenshot of the whole viewer (``--view``: of
+the first view only).
 
 What it needs: the ``rerun`` binary of the ``rerun-sdk`` package and a Vulkan driver
 (on Debian: ``apt-get install mesa-vulkan-drivers``, which brings Mesa's lavapipe and
 the Vulkan loader).  When one is missing the command prints one line saying what to
-install and exits with code 2.  It exits with code 1 when the viewer writes no PNG
-within the timeout.
+install and exits with code 2.  It exits with code 1 when no picture could be taken
+within the timeout (no data arrived, the viewer failed), with the reason.
 
-A live source (a ``rerun+http://`` URL, e.g. the node's ``serve`` sink) is first
-recorded for ``--settle`` seconds into a temporary .rrd, which is then rendered: the
-headless viewer takes its screenshot as soon as it has painted once, before a stream
-has delivered anything.
+The time shown: ``--time TIMELINE=VALUE`` places the cursor there and pauses (VALUE is
+a sequence number, or seconds for a duration or timestamp timeline, or ``first`` /
+``last``).  By default a recording file is shown at the last time of the timeline the
+viewer picked, and a live source (a ``rerun+http://`` URL, e.g. the node's ``serve``
+sink) follows the newest data for ``--settle`` seconds after its first data arrived.
 
-What is shown: the views are laid out by the recording's own blueprint, or by
-``--blueprint`` (an ``.rbl`` file written by ``rerun.blueprint.Blueprint.save`` with
-the recording's application id), which replaces it.  A blueprint fixes
+The layout is the recording's own blueprint, or ``--blueprint`` (an ``.rbl`` file
+written by ``rerun.blueprint.Blueprint.save`` with the recording's application id),
+which replaces it: the file is then rendered from a copy of its first recording store
+merged with that blueprint.  A blueprint fixes the 3D camera
+(``Spatial3DView(eye_controls=EyeControls3D(position=..., look_target=...,
+eye_up=...))``) and the panels (``Blueprint(..., collapse_panels=True)``, or
+``TopPanel/TimePanel/...(state="hidden")``).
 
-- the time shown: ``TimePanel(play_state="following")`` shows the last time of the
-  timeline, ``"paused"`` the first; without either the viewer starts playing the
-  recording and the picture shows whatever time it reached;
-- the 3D camera: ``Spatial3DView(eye_controls=EyeControls3D(position=...,
-  look_target=..., eye_up=...))``;
-- the side panels: ``Blueprint(..., collapse_panels=True)``.
-
-The viewer's command line has no option to place the time cursor at another time.
-
-``--size`` is the PNG's size in pixels.  The headless viewer draws two pixels per
-logical point, so the window is opened at half that size in points.
+``--size`` is the viewer window's size, in pixels of the PNG.
 """
 import argparse
 import importlib.util
@@ -43,7 +41,6 @@ import tempfile
 import time
 from pathlib import Path
 
-PIXELS_PER_POINT = 2
 VULKAN_PACKAGE = "mesa-vulkan-drivers"
 _ICD_DIRS = ("/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d", "/usr/local/share/vulkan/icd.d")
 _LOADER_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64",
@@ -107,8 +104,8 @@ def parse_size(text):
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise ValueError(f"size must look like 1280x800, got {text!r}") from None
-    if w < 2 * PIXELS_PER_POINT or h < 2 * PIXELS_PER_POINT or w > 8192 or h > 8192:
-        raise ValueError(f"size {w}x{h} is out of range (4..8192 pixels each way)")
+    if not (64 <= w <= 8192 and 64 <= h <= 8192):
+        raise ValueError(f"size {w}x{h} is out of range (64..8192 pixels each way)")
     return w, h
 
 
@@ -116,8 +113,9 @@ def _is_url(source):
     return "://" in str(source)
 
 
-def _stop_group(proc):
-    """Kill the viewer's whole process group (a wrapper may leave its child running)."""
+def stop_group(proc):
+    """Kill the whole process group of ``proc`` (started with start_new_session=True):
+    rerun's Python wrapper leaves its child running when only the wrapper is killed."""
     try:
         os.killpg(proc.pid, signal.SIGKILL)
     except ProcessLookupError:
@@ -125,96 +123,201 @@ def _stop_group(proc):
     proc.wait()
 
 
+def parse_time(text):
+    """``"step=12"`` -> ("step", "12"); the value is read against the timeline's type
+    once the recording has loaded.  ValueError for anything without ``=``."""
+    name, sep, value = str(text).partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise ValueError(f"time must look like TIMELINE=VALUE (e.g. step=12, step=last), got {text!r}")
+    return name.strip(), value.strip()
+
+
 def render_png(source, out_path, size=(1280, 800), timeout=60.0, blueprint=None,
-               settle=3.0):
+               settle=3.0, time_at=None, view_only=False):
     """Render ``source`` (an .rrd path or a ``rerun+http://`` URL) to the PNG
-    ``out_path`` of ``size`` = (width, height) pixels with the headless native viewer.
-    ``blueprint`` is an optional .rbl file; a live source is recorded for ``settle``
-    seconds first.  Takes at most ``timeout`` seconds in all.
-    Returns the PNG's Path.  Raises MissingDependency when the rerun binary or a Vulkan
-    driver is missing, ValueError for bad arguments, RenderError when no PNG appears."""
+    ``out_path`` with the headless native viewer in a window of ``size`` = (width,
+    height) pixels.  ``blueprint``: an optional .rbl file replacing the recording's
+    layout.  ``time_at``: ``"TIMELINE=VALUE"`` (see the module text), else a file shows
+    its last time and a live source follows its newest data for ``settle`` seconds.
+    ``view_only``: the first view's pixels, not the whole window.  Takes at most
+    ``timeout`` seconds in all.  Returns the PNG's Path.  Raises MissingDependency when
+    the rerun binary or a Vulkan driver is missing, ValueError for bad arguments,
+    RenderError when no picture could be taken."""
     width, height = (int(v) for v in size)
     parse_size(f"{width}x{height}")
     if not timeout > 0:
         raise ValueError(f"timeout must be positive seconds, got {timeout!r}")
     if not 0 <= settle < timeout:
         raise ValueError(f"settle must be in [0, timeout) seconds, got {settle!r}")
-    if not _is_url(source) and not Path(source).is_file():
+    live = _is_url(source)
+    if not live and not Path(source).is_file():
         raise ValueError(f"no recording file at {source}")
     if blueprint is not None and not Path(blueprint).is_file():
         raise ValueError(f"no blueprint file at {blueprint}")
+    if blueprint is not None and live:
+        raise ValueError("a blueprint file can replace a recording file's layout only, "
+                         "not a live source's")
+    at = parse_time(time_at) if time_at is not None else None
     exe = check_requirements()
     out = Path(out_path).resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
-    if out.exists():
-        out.unlink()
-
-    points = f"{max(1, width // PIXELS_PER_POINT)}x{max(1, height // PIXELS_PER_POINT)}"
     deadline = time.monotonic() + timeout
     with tempfile.TemporaryDirectory(prefix="mkc-render-") as tmp:
         env = dict(os.environ)
         env.setdefault("XDG_RUNTIME_DIR", tmp)
         env["RUST_LOG"] = "error"   # info/warn log lines would be drawn as notifications
-        if _is_url(source):
-            source = _record_stream(exe, source, Path(tmp) / "live.rrd", settle, deadline, env)
-        cmd = [str(exe), "--headless", "--renderer", "vulkan", "--window-size", points,
-               "--screenshot-to", str(out), "--bind", "127.0.0.1", "--port", "auto",
-               str(source)]
         if blueprint is not None:
-            cmd.append(str(blueprint))
-        code, tail = _run_until(cmd, env, deadline, Path(tmp) / "viewer.log",
-                                done=lambda: False)
-    if not out.is_file() or out.stat().st_size == 0:
-        why = "timed out" if code is None else f"exit code {code}"
-        raise RenderError(f"rerun wrote no PNG ({why}, timeout {timeout:g} s)"
-                          + (": " + " | ".join(tail) if tail else ""))
-    _fit(out, width, height)
+            source = _with_blueprint(exe, source, blueprint, Path(tmp), deadline)
+        port = free_port()
+        cmd = [str(exe), "--headless", "--renderer", "vulkan", "--window-size",
+               f"{width}x{height}", "--bind", "127.0.0.1", "--port", str(port),
+               "--hide-welcome-screen", str(source)]
+        log_path = Path(tmp) / "viewer.log"
+        with open(log_path, "w") as log:
+            proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env,
+                                    stdin=subprocess.DEVNULL, start_new_session=True)
+            try:
+                png = _drive(proc, f"rerun+http://127.0.0.1:{port}/proxy", live, at,
+                             settle, view_only, deadline)
+            except RenderError as exc:
+                tail = log_path.read_text(errors="replace").strip().splitlines()[-3:]
+                raise RenderError(f"{exc} (source {source})"
+                                  + (": " + " | ".join(tail) if tail else "")) from None
+            finally:
+                stop_group(proc)
+    out.write_bytes(png)
     return out
 
 
-def _run_until(cmd, env, deadline, log_path, done):
-    """Run ``cmd`` in its own process group until it exits, ``done()`` is true or the
-    deadline passes; then kill the group.  Returns (exit code or None if it was still
-    running, the last lines of its output)."""
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env,
-                                stdin=subprocess.DEVNULL, start_new_session=True)
+def _drive(proc, url, live, at, settle, view_only, deadline):
+    """Connect to the viewer, wait for the data, place the time, return PNG bytes."""
+    import warnings
+
+    from rerun.experimental import ViewerClient
+
+    def alive(waiting_for="the viewer"):
+        if proc.poll() is not None:
+            raise RenderError(f"the viewer exited with code {proc.returncode}")
+        if time.monotonic() > deadline:
+            raise RenderError(f"timed out waiting for {waiting_for}")
+
+    client, state = None, None
+    while state is None:
+        alive()
         try:
-            while time.monotonic() < deadline and proc.poll() is None and not done():
-                time.sleep(0.05)
-            code = proc.poll()
-        finally:
-            _stop_group(proc)
-    return code, log_path.read_text(errors="replace").strip().splitlines()[-5:]
+            client = client or ViewerClient.connect(url)
+            state = client.get_state()
+        except Exception:       # noqa: BLE001 (not listening yet)
+            client = None
+            time.sleep(0.1)
+    first_data = None
+    while True:
+        alive("data" if first_data is None else "the data to finish loading")
+        state = client.get_state()
+        recording = next((r for r in state.recordings
+                          if r.store_id == state.active_recording), None)
+        has_data = recording is not None and any(t.end is not None for t in recording.timelines)
+        if has_data and first_data is None:
+            first_data = time.monotonic()
+        if has_data and (live or not state.loading) and state.views:
+            if not live or time.monotonic() - first_data >= settle:
+                break
+        time.sleep(0.05)
+    timelines = {t.name: t for t in recording.timelines if t.end is not None}
+    if at is not None:
+        name, value = at
+        if name not in timelines:
+            raise ValueError(f"no timeline {name!r} in the recording (it has "
+                             f"{', '.join(sorted(timelines))})")
+        _seek(client, timelines[name], value)
+    elif live:
+        client.set_time(play_state="following")
+    else:
+        name = recording.current_timeline if recording.current_timeline in timelines else \
+            next(iter(timelines))
+        _seek(client, timelines[name], "last")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        view = state.views[0].view_id if view_only else None
+        try:
+            png = client.take_screenshot(view)
+        except Exception as exc:        # noqa: BLE001 (the viewer's own error text)
+            raise RenderError(f"the viewer took no screenshot: {exc}") from None
+    if not png.startswith(b"\x89PNG"):
+        raise RenderError("the viewer returned no PNG")
+    return png
 
 
-def _record_stream(exe, url, path, settle, deadline, env):
-    """Save what the live source ``url`` sends during ``settle`` seconds (after its
-    first bytes) to the .rrd ``path``; RenderError if nothing arrives by the deadline."""
-    first = []
+def _seek(client, timeline, value):
+    """Pause with the cursor at ``value`` ("first", "last", a number) on ``timeline``."""
+    import numpy as np
+    if value in ("first", "last"):
+        raw = timeline.start if value == "first" else timeline.end
+        kind = {"sequence": "sequence", "duration": "duration", "timestamp": "timestamp"}
+        arg = {"sequence": raw, "duration": np.timedelta64(raw, "ns"),
+               "timestamp": np.datetime64(raw, "ns")}[timeline.time_type]
+        client.set_time(timeline.name, play_state="paused", **{kind[timeline.time_type]: arg})
+        return
+    try:
+        number = int(value) if timeline.time_type == "sequence" else float(value)
+    except ValueError:
+        raise ValueError(f"time {value!r} on the {timeline.time_type} timeline "
+                         f"{timeline.name!r}: want first, last or a number") from None
+    client.set_time(timeline.name, play_state="paused", **{timeline.time_type: number})
 
-    def done():
-        if not first and path.is_file() and path.stat().st_size > 0:
-            first.append(time.monotonic())
-        return bool(first) and time.monotonic() - first[0] >= settle
 
-    code, tail = _run_until([str(exe), "--save", str(path), str(url)], env, deadline,
-                            path.with_suffix(".log"), done)
-    if not first:
-        raise RenderError(f"no data from {url} before the timeout"
-                          + (f" (rerun exited with code {code})" if code is not None else "")
-                          + (": " + " | ".join(tail) if tail else ""))
-    return path
+def free_port():
+    """A TCP port on 127.0.0.1 that was free a moment ago."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
-def _fit(path, width, height):
-    """Resize the PNG to exactly width x height when the viewer's scale differed."""
-    from PIL import Image
-    with Image.open(path) as im:
-        if im.size == (width, height):
-            return
-        fitted = im.convert("RGBA").resize((width, height), Image.LANCZOS)
-    fitted.save(path)
+def _stores(path):
+    """(recording stores, blueprint stores) of an .rrd file; ([], []) if unreadable."""
+    import warnings
+    from rerun.chunk import RrdReader
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")     # a streamed file has no footer; that is fine
+        try:
+            reader = RrdReader(str(path))
+            return reader.recordings(), reader.blueprints()
+        except Exception:       # noqa: BLE001 (any decoding failure means: no data)
+            return [], []
+
+
+def _with_blueprint(exe, path, blueprint, tmp, deadline):
+    """One .rrd holding the first recording of ``path`` and the blueprint file, which
+    the viewer then applies every time (given as two files on its command line, the
+    recording's own or the default blueprint wins when the recording loads last)."""
+    out = tmp / "with-blueprint.rrd"
+    cmd = [str(exe), "rrd", "merge", str(_without_blueprint(path, tmp / "data.rrd")),
+           str(blueprint), "-o", str(out)]
+    try:
+        done = subprocess.run(cmd, capture_output=True, text=True,
+                              timeout=max(1.0, deadline - time.monotonic()))
+    except subprocess.TimeoutExpired:
+        raise RenderError("merging the blueprint into the recording timed out") from None
+    if done.returncode != 0 or not out.is_file():
+        raise RenderError(f"rerun rrd merge failed: {done.stderr.strip()[-300:]}")
+    return out
+
+
+def _without_blueprint(path, out):
+    """The first recording of ``path`` without the blueprints stored beside it.
+    Returns ``path`` itself when it has none."""
+    import warnings
+    from rerun.chunk import RrdReader
+    recordings, blueprints = _stores(path)
+    if not blueprints or not recordings:
+        return path
+    first = recordings[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        RrdReader(str(path)).stream(store=first).write_rrd(
+            str(out), application_id=first.application_id, recording_id=first.recording_id)
+    return out
 
 
 def main(argv=None):
@@ -227,20 +330,26 @@ def main(argv=None):
                         help="seconds to wait for the image (default 60)")
     parser.add_argument("--blueprint", help="an .rbl blueprint file to lay out the views")
     parser.add_argument("--settle", type=float, default=3.0,
-                        help="seconds of a live source to collect before rendering (default 3)")
+                        help="seconds a live source streams before the picture (default 3)")
+    parser.add_argument("--time", dest="time_at", metavar="TIMELINE=VALUE",
+                        help="time cursor, e.g. step=12, step=first, step=last "
+                             "(default: a file's last time, a live source's newest data)")
+    parser.add_argument("--view", action="store_true",
+                        help="save the first view only, not the whole viewer window")
     args = parser.parse_args(argv)
     try:
         size = parse_size(args.size)
         t0 = time.monotonic()
         out = render_png(args.source, args.out, size=size, timeout=args.timeout,
-                         blueprint=args.blueprint, settle=args.settle)
+                         blueprint=args.blueprint, settle=args.settle,
+                         time_at=args.time_at, view_only=args.view)
     except MissingDependency as exc:
         print(f"render_recording: missing: {exc}", file=sys.stderr)
         return 2
     except (ValueError, RenderError) as exc:
         print(f"render_recording: {exc}", file=sys.stderr)
         return 1
-    print(f"wrote {out} ({size[0]}x{size[1]}) in {time.monotonic() - t0:.1f} s")
+    print(f"wrote {out} in {time.monotonic() - t0:.1f} s")
     return 0
 
 

@@ -165,8 +165,8 @@ class WebSocket:
 class DevTools:
     """Commands to one page target; events are read and dropped."""
 
-    def __init__(self, ws_url):
-        self.ws = WebSocket(ws_url)
+    def __init__(self, ws_url, timeout):
+        self.ws = WebSocket(ws_url, timeout)
         self.next_id = 0
 
     def call(self, method, **params):
@@ -315,8 +315,12 @@ def run(args):
             time.sleep(0.1)
         devtools_port = int(port_file.read_text().split()[0])
         targets = json.loads(wait_http(f"http://127.0.0.1:{devtools_port}/json/list", deadline))
-        target = next(t for t in targets if t.get("type") == "page")
-        cdp = DevTools(target["webSocketDebuggerUrl"])
+        pages = [t for t in targets if t.get("type") == "page"]
+        if not pages:
+            raise RuntimeError(f"chromium lists no page to drive: {targets}")
+        target = pages[0]
+        # a busy browser answers slowly: wait for an answer as long as the whole check
+        cdp = DevTools(target["webSocketDebuggerUrl"], timeout=args.timeout)
         cdp.call("Emulation.setDeviceMetricsOverride", width=w, height=h, deviceScaleFactor=1,
                  mobile=False)
         t0 = time.monotonic()
@@ -397,6 +401,9 @@ def main(argv=None):
     except MissingDependency as exc:
         print(f"web_viewer_check: missing: {exc}", file=sys.stderr)
         return 2
+    except (OSError, RuntimeError) as exc:     # timeouts, refused, closed
+        print(f"web_viewer_check: no picture: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1
     verdict = "ok" if ok else "the picture stayed blank or wrong"
     print(f"[web-check] {verdict}: {why}", file=sys.stdout if ok else sys.stderr)
     return 0 if ok else 1

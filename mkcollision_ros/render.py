@@ -52,7 +52,7 @@ class MissingDependency(RuntimeError):
 
 
 class RenderError(RuntimeError):
-    """The viewer ran but wrote no image."""
+    """No picture could be taken: no data came, the viewer failed, or time ran out."""
 
 
 def rerun_binary():

@@ -13,8 +13,8 @@ import rerun as rr
 import rerun.blueprint as rrb
 from PIL import Image
 
-from mkcollision_ros.render import (MissingDependency, RenderError, check_requirements, parse_size,
-                                    render_png)
+from mkcollision_ros.render import (MissingDependency, RenderError, check_requirements, free_port,
+                                    parse_size, render_png)
 
 APP = "mkcollision_render_test"
 SIZE = (640, 400)
@@ -152,7 +152,7 @@ def test_live_source_renders_its_newest_data(tmp_path):
     the render starts reaches the picture, at its newest step."""
     rr.set_strict_mode(True)
     rec = rr.RecordingStream(APP)
-    port = 20000 + os.getpid() % 20000
+    port = free_port()
     rec.set_sinks(rr.GrpcServerSink(bind_ip="127.0.0.1", port=port))
     _log_scene(rec)
     rec.flush()
@@ -160,6 +160,62 @@ def test_live_source_renders_its_newest_data(tmp_path):
                      size=SIZE, timeout=60.0, settle=1.0)
     _check_picture(out)
     del rec
+
+
+def test_project_recording_shows_each_state_where_its_bodies_are(tmp_path):
+    """A recording of the project's own logger (Pipeline(rerun="save:...")): a deep
+    pair on the left, a touching pair on the right, a free body above; rendered with a
+    fixed camera on world/bodies (labels off), each state's colour is where its bodies
+    are."""
+    from mkcollision_ros.pipeline import Pipeline
+    from mkcollision_ros.rerun_log import DEEP, FREE, TOUCHING
+    from mkcollision_ros.render import _stores
+
+    bodies = [{"name": "deep_a", "shape": {"type": "sphere", "radius": 0.6}},
+              {"name": "deep_b", "shape": {"type": "sphere", "radius": 0.6}},
+              {"name": "touch_a", "shape": {"type": "box", "size": [1.0, 1.0, 1.0]}},
+              {"name": "touch_b", "shape": {"type": "box", "size": [1.0, 1.0, 1.0]}},
+              {"name": "free", "shape": {"type": "sphere", "radius": 0.6}}]
+    pos = np.array([[-3.3, 0, 0], [-2.5, 0, 0], [2.5, 0, 0], [3.495, 0, 0], [0, 0, 2.5]])
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (len(bodies), 1))
+    rrd = tmp_path / "pipeline.rrd"
+    p = Pipeline(bodies, rerun=f"save:{rrd}")
+    for k in range(3):
+        res = p.step(pos, quat, 1.0 + 0.1 * k)
+    p.close()
+    assert sorted(res.pairs.tolist()) == [[0, 1], [2, 3]]
+    no_labels = [rr.Ellipsoids3D.from_fields(show_labels=False),
+                 rr.Boxes3D.from_fields(show_labels=False)]
+    rbl = tmp_path / "bodies.rbl"
+    rrb.Blueprint(
+        rrb.Spatial3DView(origin="/world/bodies", line_grid=False, background=[255, 255, 255],
+                          defaults=no_labels,
+                          eye_controls=rrb.EyeControls3D(position=[0, -9, 0.5],
+                                                         look_target=[0, 0, 0.5],
+                                                         eye_up=[0, 0, 1])),
+        rrb.TopPanel(state="hidden"), rrb.BlueprintPanel(state="hidden"),
+        rrb.SelectionPanel(state="hidden"), rrb.TimePanel(state="hidden"),
+    ).save(_stores(rrd)[0][0].application_id, str(rbl))
+    out = render_png(rrd, tmp_path / "pipeline.png", size=SIZE, blueprint=rbl, view_only=True)
+    rgb = np.asarray(Image.open(out).convert("RGB")).astype(np.float64)
+
+    def shade_of(colour):
+        """Pixels pointing the way of ``colour`` in RGB (shading scales them)."""
+        c = np.asarray(colour[:3], np.float64)
+        norm = np.linalg.norm(rgb, axis=2)
+        cos = (rgb @ c) / np.maximum(norm * np.linalg.norm(c), 1e-9)
+        return (cos > np.cos(np.radians(4))) & (norm > 0.3 * np.linalg.norm(c)) \
+            & (norm < 0.95 * np.linalg.norm([255.0] * 3))
+
+    centroid = {}
+    for name, colour in (("deep", DEEP), ("touching", TOUCHING), ("free", FREE)):
+        ys, xs = np.nonzero(shade_of(colour))
+        assert len(xs) >= 300, f"{name}: only {len(xs)} pixels of {colour}"
+        centroid[name] = (np.median(xs), np.median(ys))   # edge pixels of others aside
+    (dx, dy), (tx, ty), (fx, fy) = centroid["deep"], centroid["touching"], centroid["free"]
+    w = rgb.shape[1]
+    assert dx < 0.45 * w < 0.55 * w < tx and dx < fx < tx, centroid
+    assert fy < dy and fy < ty and abs(dy - ty) < 0.05 * rgb.shape[0], centroid
 
 
 def test_cli_writes_png_and_reports_missing_vulkan(tmp_path):
@@ -204,7 +260,7 @@ def test_bad_arguments(tmp_path, monkeypatch):
 
 def test_silent_live_source_fails_clearly(tmp_path):
     """No server at the address: a RenderError saying no data came."""
-    url = f"rerun+http://127.0.0.1:{40000 + os.getpid() % 20000}/proxy"
+    url = f"rerun+http://127.0.0.1:{free_port()}/proxy"      # nothing listens there
     with pytest.raises(RenderError, match="timed out waiting for data"):
         render_png(url, tmp_path / "x.png", timeout=3.0, settle=1.0)
     assert not (tmp_path / "x.png").exists()

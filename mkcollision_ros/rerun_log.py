@@ -221,6 +221,26 @@ def _groups(scene):
                    np.array(planes, bool))
 
 
+def blueprint(pairs=()):
+    """The layout: 3D scene | series, table, events | one view per chosen pair (a list
+    of (a, b)); the time panel as a bar (play, step, scrub) following the newest step,
+    the side panels collapsed."""
+    import rerun.blueprint as rrb
+    side = rrb.Vertical(
+        rrb.TimeSeriesView(origin="stats", name="contacts"),
+        rrb.TimeSeriesView(origin="timing", name="time (ms)"),
+        rrb.TextDocumentView(origin="tables/contacts", name="contacts"),
+        rrb.TextLogView(origin="events", name="events"))
+    views = [rrb.Spatial3DView(origin="world", name="scene"), side]
+    views += [rrb.Spatial3DView(origin=f"minkowski/{a}-{b}", name=f"{a} - {b}")
+              for a, b in pairs]
+    shares = [3, 2] + [2] * len(pairs)
+    return rrb.Blueprint(rrb.Horizontal(*views, column_shares=shares),
+                         rrb.BlueprintPanel(state="collapsed"),
+                         rrb.SelectionPanel(state="collapsed"),
+                         rrb.TimePanel(state="collapsed", play_state="following"))
+
+
 def _markdown_table(names, res, rows):
     """The deepest ``rows`` contacts of ``res`` as a markdown table."""
     n = len(res.depth)
@@ -258,8 +278,7 @@ class RerunLog:
         self.point_size, self.table_rows = float(point_size), int(table_rows)
         self.minkowski_method = minkowski_method
         import rerun as rr
-        import rerun.blueprint as rrb
-        self._rr, self._rrb = rr, rrb
+        self._rr = rr
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._viewer = None
         self.where = self._open(self.sink, memory_limit, int(web_port))
@@ -294,29 +313,15 @@ class RerunLog:
                                  "is not on PATH, needed for the web viewer; set "
                                  "web_port 0 to serve without it")
             self._viewer = subprocess.Popen(
-                [exe, "--web-viewer", "--bind", ip, "--web-viewer-port", str(web_port),
+                [exe, "--serve-web", "--bind", ip, "--web-viewer-port", str(web_port),
                  server.uri], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                 start_new_session=True)
             where += f"; web viewer: http://{ip}:{web_port}/?url={server.uri}"
         return where
 
     def blueprint(self):
-        """The layout: 3D scene | series, table, events | one view per chosen pair; the
-        time panel as a bar (play, step, scrub), the side panels collapsed."""
-        rrb = self._rrb
-        side = rrb.Vertical(
-            rrb.TimeSeriesView(origin="stats", name="contacts"),
-            rrb.TimeSeriesView(origin="timing", name="time (ms)"),
-            rrb.TextDocumentView(origin="tables/contacts", name="contacts"),
-            rrb.TextLogView(origin="events", name="events"))
-        views = [rrb.Spatial3DView(origin="world", name="scene"), side]
-        views += [rrb.Spatial3DView(origin=f"minkowski/{a}-{b}", name=f"{a} - {b}")
-                  for a, b in self.pairs]
-        shares = [3, 2] + [2] * len(self.pairs)
-        return rrb.Blueprint(rrb.Horizontal(*views, column_shares=shares),
-                             rrb.BlueprintPanel(state="collapsed"),
-                             rrb.SelectionPanel(state="collapsed"),
-                             rrb.TimePanel(state="collapsed"))
+        """This log's layout (``blueprint(self.pairs)``)."""
+        return blueprint(self.pairs)
 
     def close(self):
         """Flush and close the sink; stop the web viewer."""

@@ -10,5 +10,8 @@ case $- in *u*) _MK_U=1; set +u;; *) _MK_U=;; esac
 . "$_MK_ROOT/install/local_setup.bash"
 [ -n "$_MK_U" ] && set -u
 unset _MK_U
+# the package's executables (what `ros2 run mkcollision_ros <name>` starts) as commands:
+# collision_node, demo, demo_publisher, render_recording
+export PATH="$_MK_ROOT/install/mkcollision_ros/lib/mkcollision_ros:$PATH"
 # Keep DDS discovery on this machine unless the user asks for more.
 export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"

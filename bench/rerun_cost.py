@@ -13,7 +13,7 @@ seconds to each sink in turn (file, then serve with its 256 MiB buffer and no vi
 the process's resident memory is sampled every 10 s.
 
     PYTHONPATH=. .venv/bin/python bench/rerun_cost.py [--sizes 100 1000 10000]
-    PYTHONPATH=. .venv/bin/python bench/rerun_cost.py --memory-seconds 600
+    PYTHONPATH=. .venv/bin/python bench/rerun_cost.py --memory-seconds 600 [--sinks save serve]
 """
 import argparse
 import os
@@ -65,12 +65,14 @@ def cost(n, steps, warm, seed):
                 p99=np.percentile(wall, 99), kib=size)
 
 
-def memory(seconds, seed):
+def memory(seconds, seed, kinds=("save", "serve")):
     bodies, pos, quat, _ = scene(1000, 0.2, seed)
     rng = np.random.default_rng(seed)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for sink in (f"save:{os.path.join(tmp, 'long.rrd')}", "serve:127.0.0.1:19877"):
+        specs = {"save": f"save:{os.path.join(tmp, 'long.rrd')}",
+                 "serve": "serve:127.0.0.1:19877"}
+        for sink in (specs[k] for k in kinds):
             p = Pipeline(bodies, rerun=RerunLog(sink, web_port=0, memory_limit="256MiB"))
             start = time.monotonic()
             samples, k, nxt = [], 0, 0.0
@@ -97,10 +99,12 @@ def main():
     ap.add_argument("--warm", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--memory-seconds", type=float, default=0.0)
+    ap.add_argument("--sinks", nargs="+", default=["save", "serve"],
+                    choices=["save", "serve"], help="sinks of the memory run")
     a = ap.parse_args()
     if a.memory_seconds > 0:
         print("| sink | steps | resident MB at t = 0, 10, 20 ... s |\n|---|---|---|")
-        for sink, k, samples in memory(a.memory_seconds, a.seed):
+        for sink, k, samples in memory(a.memory_seconds, a.seed, a.sinks):
             first = samples[0][1]
             peak = max(m for _, m in samples)
             print(f"| {sink} | {k} | {', '.join(f'{m:.0f}' for _, m in samples)} "

@@ -7,8 +7,10 @@ pairs, the Minkowski difference with the iterations of the method that answered.
 
 Sinks (``parse_sink``; rerun is imported only when one is opened, never for "off"):
   off                         nothing
-  save:<file.rrd>             stream to a file (bounded memory: the file sink writes
-                              as it goes)
+  save:<file.rrd>             stream to a file; every FLUSH_STEPS steps the log waits
+                              until the file has everything, so when the disk or
+                              rerun's encoder falls behind the steps wait instead of
+                              memory growing
   connect[:<url>]             stream to a running viewer (gRPC, default
                               rerun+http://127.0.0.1:9876/proxy)
   serve[:[<ip>:]<port>]       host a gRPC server (default 127.0.0.1:9876; it buffers at
@@ -76,6 +78,7 @@ DEFAULT_CONNECT = "rerun+http://127.0.0.1:9876/proxy"
 DEFAULT_SERVE = ("127.0.0.1", 9876)
 SINK_FORMS = "off | save:<file.rrd> | connect[:<url>] | serve[:[<ip>:]<port>]"
 _DATE = 1e8          # s: a stamp beyond this (1973) is a date, else a duration
+FLUSH_STEPS = 50     # the file sink's bound on steps held in memory (~1 ms a flush)
 _SHAPE_GROUPS = {"sphere": "ellipsoids", "ellipsoid": "ellipsoids", "box": "boxes",
                  "capsule": "capsules", "cylinder": "cylinders", "cone": "meshes",
                  "convex": "meshes", "plane": "meshes"}
@@ -288,6 +291,7 @@ class RerunLog:
         self._last = {}              # group -> (groups, posed, positions, quats, colours)
         self._label_of = {}          # contact id -> its label
         self._styled = False         # the contacts' static colours and sizes are sent
+        self._since_flush = 0
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log("stats", rr.SeriesLines(names=["contacts", "touching pairs",
                                                     "candidate pairs"]), static=True)
@@ -354,6 +358,10 @@ class RerunLog:
         self._log_series(res, latency)
         for a, b in self.pairs:
             self._log_minkowski(scene, res, a, b)
+        self._since_flush += 1
+        if self.sink.kind == "save" and self._since_flush >= FLUSH_STEPS:
+            self._since_flush = 0
+            rec.flush()
 
     def _clear_if_empty(self, path, group, n):
         if n:

@@ -7,7 +7,9 @@ pairs, the Minkowski difference with the iterations of the method that answered.
 
 Sinks (``parse_sink``; rerun is imported only when one is opened, never for "off"):
   off                         nothing
-  save:<file.rrd>             stream to a file; every FLUSH_STEPS steps the log waits
+  save:<file.rrd>             stream to a file (without rerun's footer index, which
+                              grows in memory with the run); every FLUSH_STEPS steps
+                              the log waits
                               until the file has everything, so when the disk or
                               rerun's encoder falls behind the steps wait instead of
                               memory growing
@@ -301,7 +303,11 @@ class RerunLog:
         """Open the sink; returns a line saying how to look at the recording."""
         rr, bp = self._rr, self.blueprint()
         if sink.kind == "save":
-            self.rec.save(sink.target, default_blueprint=bp)
+            # no footer: rerun keeps the footer's index of every chunk in memory until
+            # the file closes (~9 KB a step at 1,000 bodies, without bound on a long
+            # run); viewers and read_recording read the file whole instead
+            self.rec.set_sinks(rr.FileSink(sink.target, write_footer=False),
+                               default_blueprint=bp)
             return f"recording to {sink.target}; open it with: rerun {sink.target}"
         if sink.kind == "connect":
             self.rec.connect_grpc(sink.target, default_blueprint=bp)
@@ -630,8 +636,12 @@ def read_recording(path):
 def read_blueprint_views(path):
     """The views of a recording's blueprint: [(kind, origin, name), ...], kind as rerun
     names it ("3D", "TimeSeries", "TextDocument", "TextLog", ...)."""
+    import warnings
+
     from rerun.chunk import RrdReader
-    reader = RrdReader(str(path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")      # a file without footer: read whole
+        reader = RrdReader(str(path))
     views = []
     for store in reader.blueprints():
         for chunk in reader.stream(store=store).to_chunks():

@@ -226,7 +226,35 @@ def minkowski_difference(shape_a, pose_a, shape_b, pose_b, directions=400):
         ax, ay, az, bx, by, bz = minkowski_full_xyz(pair.sa, pair.sb, pair.verts,
                                                     pair.r_ab, pair.t_ab, dx, dy, dz)
         pts[i] = ax - bx, ay - by, az - bz
-    pts = np.unique(pair.world(pts), axis=0)
-    tri = hull_triangles(pts)
-    used, tri = np.unique(tri, return_inverse=True)
-    return pts[used], tri.reshape(-1, 3).astype(np.int32)
+    return _convex_mesh(pair.world(pts))
+
+
+def _spread(P, tol):
+    """Indices of the points of P kept when each point within ``tol`` of an earlier
+    kept one is dropped."""
+    keep = []
+    for i in range(len(P)):
+        if not keep or np.min(np.linalg.norm(P[keep] - P[i], axis=1)) > tol:
+            keep.append(i)
+    return np.array(keep)
+
+
+def _convex_mesh(P):
+    """(vertices, triangles int32) of the hull of the points P, every vertex a corner.
+    Points closer together than a tolerance are merged first (the hull's tolerances
+    leave a dent where two corners nearly coincide); the tolerance grows until the
+    hull is convex to round-off (no corner above a face plane by 1e-9 of the extent)."""
+    size = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+    for tol in (1e-6, 1e-4, 1e-2):
+        Q = P[_spread(P, tol * size)]
+        if len(Q) < 4:
+            break
+        tri = hull_triangles(Q)
+        nrm = np.cross(Q[tri[:, 1]] - Q[tri[:, 0]], Q[tri[:, 2]] - Q[tri[:, 0]])
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        off = np.einsum("ij,ij->i", nrm, Q[tri[:, 0]])
+        if np.all(Q @ nrm.T <= off + 1e-9 * size):
+            used, tri = np.unique(tri, return_inverse=True)
+            return Q[used], tri.reshape(-1, 3).astype(np.int32)
+    raise ValueError("minkowski_difference: no convex hull of the support points (the "
+                     "difference is flat or degenerate)")

@@ -109,19 +109,16 @@ def _closed_star_surface(faces, normals, offsets, c, size):
     return bool(np.all(normals @ c < offsets - _THICK * size))
 
 
-def hull_keep(points):
-    """Indices (ascending) of the points a convex shape keeps: all but those certainly
-    strictly inside the hull of the others (module docstring).  ``points``: (M, 3)
-    finite floats."""
-    P = np.asarray(points, dtype=np.float64)
+def _surface(P):
+    """The computed surface Q of the module docstring for the points P (M >= 4, 3):
+    (faces (K, 3) int64 wound outward, unit normals (K, 3), offsets (K,), the points'
+    extent), or None when a check fails (flat or needle sets, round-off)."""
     n = len(P)
     every = np.arange(n)
-    if n < 5:
-        return every
     size = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
     tet = _tetrahedron(P, size) if size > 0.0 else None
     if tet is None:
-        return every
+        return None
     above = _ABOVE * size
     c = P[list(tet)].mean(axis=0)
     # faces in growing arrays: corners wound outward, unit normal, offset, alive flag;
@@ -179,7 +176,7 @@ def hull_keep(points):
             continue
         steps += 1
         if steps > n:                           # each step puts a point on the hull
-            return every
+            return None
         pts = conflict[f]
         p = int(pts[np.argmax(P[pts] @ FN[f] - FD[f])])
         # the faces p sees: a walk over edge neighbours from f (the seen region of a
@@ -194,7 +191,7 @@ def hull_keep(points):
             for e in ((a, b), (b, cc), (cc, a)):
                 g = edge_face.get((e[1], e[0]), -1)
                 if g < 0:
-                    return every                # not closed: round-off broke it
+                    return None                 # not closed: round-off broke it
                 if alive[g] and FN[g] @ P[p] - FD[g] > above:
                     alive[g] = False
                     seen.append(g)
@@ -212,22 +209,55 @@ def hull_keep(points):
             del conflict[g]
         new = [add_face(a, b, p, False) for a, b in horizon]
         if not np.all(FN[new] @ c < FD[new]):   # round-off: the final check would fail
-            return every
+            return None
         assign(new, orphans)
         todo.extend(new)
     live = np.flatnonzero(alive[:nf])
     if not _closed_star_surface(FA[live].tolist(), FN[live], FD[live], c, size):
+        return None
+    return FA[live], FN[live], FD[live], size
+
+
+def hull_keep(points):
+    """Indices (ascending) of the points a convex shape keeps: all but those certainly
+    strictly inside the hull of the others (module docstring).  ``points``: (M, 3)
+    finite floats."""
+    P = np.asarray(points, dtype=np.float64)
+    n = len(P)
+    every = np.arange(n)
+    if n < 5:
         return every
+    surface = _surface(P)
+    if surface is None:
+        return every
+    faces, normals, offsets, size = surface
     # the hull's vertices stay; every other point is tested against all face planes
     # (in blocks: points times faces can be large)
     keep = np.zeros(n, dtype=bool)
-    keep[np.unique(FA[live])] = True
+    keep[np.unique(faces)] = True
     rest = np.flatnonzero(~keep)
     for k in range(0, len(rest), 1024):
         idx = rest[k:k + 1024]
-        depth_below = (FD[live] - P[idx] @ FN[live].T).min(axis=1)
+        depth_below = (offsets - P[idx] @ normals.T).min(axis=1)
         keep[idx] = ~(depth_below > _MARGIN * size)
     return np.flatnonzero(keep)
+
+
+def hull_triangles(points):
+    """The convex hull of ``points`` ((M, 3) finite floats, M >= 4) as triangles: (K, 3)
+    int64 indices into ``points``, wound counter-clockwise seen from outside (the
+    normal (p1 - p0) x (p2 - p0) points out), from the same quickhull as ``hull_keep``
+    (points within its tolerance of a face are no corners).  ValueError when the points
+    are flat or round-off broke the surface (module docstring, the checks)."""
+    P = np.asarray(points, dtype=np.float64)
+    if P.ndim != 2 or P.shape[1] != 3 or len(P) < 4 or not np.all(np.isfinite(P)):
+        raise ValueError(f"hull_triangles: need (M >= 4, 3) finite points, got shape "
+                         f"{P.shape}")
+    surface = _surface(P)
+    if surface is None:
+        raise ValueError("hull_triangles: the points are flat (or round-off broke the "
+                         "hull): no closed convex surface")
+    return surface[0].astype(np.int64)
 
 
 # point sets up to this size are kept whole (see hull_points)

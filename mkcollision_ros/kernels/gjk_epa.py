@@ -150,6 +150,20 @@ Phases of ``gjk_epa``
   Scratch memory: ``gjk_epa`` allocates one workspace per call; the batch kernel
   calls ``gjk_epa_ws`` with one workspace per chunk of pairs (no allocation per pair).
 
+Trace (for visual debugging, mkcollision_ros/trace.py): a workspace whose fs has at
+least _FS_ROWS + TR_HEADER_ROWS rows (make_gjk_workspace_traced) makes ``gjk_epa_ws``
+record its iterations in the fs rows from _FS_ROWS on, a trace region as
+kernels/tracebuf.py lays out: the GJK simplex of the
+cores (TR_GJK: the first support point, then the simplex after each step that changed
+it; the last record is GJK's final simplex, the tetrahedron when the cores overlap),
+then EPA's polytope (TR_EPA: its vertices and live faces at the start of each step,
+from the tetrahedron on; the last record is the final polytope, whose nearest face is
+EPA's lower bound).  GJK's run inside _witness_by_gjk (a shifted pair) is not recorded.
+With the options row's column 0 > 0, the closed forms of ``gjk_epa_ws`` (cylinder
+pairs, an ellipsoid and a box, an ellipsoid or a cylinder and a small hull) are skipped
+so that GJK/EPA iterate and get recorded; the result is then GJK/EPA's own.  Options
+zero: the results do not depend on the trace.
+
 Measured accuracy against coal 3.0.3 (gjk_tolerance 1e-12, epa_tolerance 1e-10, see
 tests/test_gjk_epa.py; max |ours - coal| / scale over random pairs where coal itself is
 trustworthy; scale = sum of bounding radii):
@@ -201,6 +215,7 @@ from .hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED,
 from .hullcyl import cylinder_hull_depth, cylinder_hull_pair
 from .jit import borrow, njit_inline, njit_kernel
 from .simplex import _closest_simplex, _tri_closest
+from .tracebuf import TR_EPA, TR_GJK, TR_HEADER_ROWS, trace_open, trace_reset, trace_rows
 
 # Scratch buffers ``ws`` = (fs, fv, iv) of one GJK/EPA call, allocated once per chunk of
 # pairs by the batch kernel and reused pair after pair; no state survives from one pair
@@ -268,6 +283,18 @@ def make_gjk_workspace():
             np.zeros((_IV_ROWS, 3), dtype=np.uint64))
 
 
+@njit_kernel
+def make_gjk_workspace_traced(rows):
+    """``make_gjk_workspace()`` with a trace region of ``rows`` (>= TR_HEADER_ROWS) rows
+    after fs's working rows (module docstring, "Trace"), its header and options zero:
+    the same array types, so ``gjk_epa_ws`` runs the same compiled code."""
+    fs = np.empty((_FS_ROWS + rows, 3))
+    for r in range(_FS_ROWS, _FS_ROWS + TR_HEADER_ROWS):
+        for c in range(3):
+            fs[r, c] = 0.0
+    return (fs, np.zeros(_FV_SIZE), np.zeros((_IV_ROWS, 3), dtype=np.uint64))
+
+
 # outcome flags of the GJK loop
 _GJK_APART = 0       # converged, origin outside: v is the closest point
 _GJK_OVERLAP = 1     # origin inside (or within round-off of) the simplex
@@ -290,7 +317,7 @@ def _dot(a, b):
 
 
 @njit_inline
-def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
+def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     """GJK loop on the cores (geometry.minkowski_core_xyz).
 
     Writes into the workspace ``ws``: W, WA, WB float64 (4, 3), the simplex of A - B and
@@ -306,6 +333,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
     cores: GJK needs ~25 steps to 1e-12 there), or between a convex hull and an
     ellipsoid the tests of the hull's features (_hull_polish); on success return
     _GJK_POLISHED, else go on.
+    ``trace_on`` True: the simplices are recorded in ws[0]'s trace region (module
+    docstring, "Trace").
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND,
     the lower bound v.w / |v| for _GJK_BOUND, else 0).
     Inlined into its two callers: as a called function it took 0.3 us more per deep pair
@@ -336,6 +365,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
         v[c] = w[c]
     lam[0] = 1.0
     n = 1
+    if trace_on:
+        trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
     if tn > 0.0:
         # the centre line may already separate them: h_{A-B}(t/|t|) < -stop (the first
         # support is along it; MuJoCo's GJK makes the same test before its first step)
@@ -448,6 +479,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
         n = _closest_simplex(W, WA, WB, n, lam, v, ws[1][_L3:_L3 + 3], ws[1][_VOL:_VOL + 4])
         if n == 4:
             flag = _GJK_OVERLAP
+            if trace_on:
+                trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
             break
         vv_new = _dot(v, v)
         if vv_new >= vv:
@@ -463,6 +496,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
                 v[c] = v_prev[c]
             flag = _GJK_APART if vv > zero2 else _GJK_OVERLAP
             break
+        if trace_on:
+            trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
         vv = vv_new
     return n, it, flag, 0.0
 
@@ -2014,6 +2049,28 @@ def _vertex_cap(sa, sb, r_ab, n):
 
 
 @njit_kernel
+def _trace_polytope(fs, V, F, alive, nv, nf):
+    """Record EPA's polytope (vertices V[:nv], the live faces among F[:nf]) in fs's
+    trace region (TR_EPA, module docstring)."""
+    nlive = 0
+    for f in range(nf):
+        if alive[f]:
+            nlive += 1
+    r = trace_open(fs, _FS_ROWS, TR_EPA, nv, nlive)
+    if r < 0:
+        return
+    for i in range(nv):
+        for c in range(3):
+            fs[r + i, c] = V[i, c]
+    r += nv
+    for f in range(nf):
+        if alive[f]:
+            for c in range(3):
+                fs[r, c] = float(F[f, c])
+            r += 1
+
+
+@njit_kernel
 def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
     holds the origin; W, WA, WB of the workspace ``ws``).  Writes ws[1][_RES:_RES + 10] (10,) =
@@ -2140,7 +2197,10 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
             p_planes = True
             p_cap = fs[_T3 + 3, 0]
             p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
+    trace_on = fs.shape[0] >= _FS_ROWS + TR_HEADER_ROWS
     while True:
+        if trace_on:
+            _trace_polytope(fs, V, F, alive, nv, nf)
         # face closest to the origin
         best = np.int64(-1)   # typed int64 at once (jit.py, "Literal")
         bd = np.inf
@@ -2423,7 +2483,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     t2 = ws[0][_T3 + 13]
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
-    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False)
+    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False, False)
     if flag != _GJK_APART:
         return 0
     fs, fv = ws[0], ws[1]
@@ -2483,6 +2543,12 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ws = borrow_gjk_workspace(ws)
     out = borrow(out)
     nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
+    # a trace region (module docstring, "Trace"): its options, then reset
+    trace_on = ws[0].shape[0] >= _FS_ROWS + TR_HEADER_ROWS
+    iterate = False
+    if trace_on:
+        iterate = ws[0][_FS_ROWS + 1, 0] > 0.0
+        trace_reset(ws[0], _FS_ROWS)
     _fallback_normal(t_ab, nrm)
     for c in range(3):
         pa[c] = 0.0
@@ -2504,7 +2570,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     rb = inflation(sb[0], sb[1])
     res = ws[1][_RES:_RES + 10]
     fan = HE_UNDECIDED
-    if sa[0] == CYLINDER or sb[0] == CYLINDER:
+    if not iterate and (sa[0] == CYLINDER or sb[0] == CYLINDER):
         # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl), or a
         # box (boxcyl: the exact depth in closed form): cores that overlap get their
         # depth certified (cylcyl: one core's point as deep inside the cylinder as h
@@ -2535,14 +2601,14 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
                 d = hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res)
         if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
-    elif _ellipsoid_box(sa[0], sb[0]):
+    elif not iterate and _ellipsoid_box(sa[0], sb[0]):
         # an ellipsoid and a box (boxell): the core depth at a box face certified by a
         # ball, the cores' exact distance over a face, an edge or a vertex, or a plane
         # proving them farther apart than the cutoff and the touching band
         d, exact = ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
         if exact or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
-    elif ellipsoid_hull_pair(sa, sb):
+    elif not iterate and ellipsoid_hull_pair(sa, sb):
         # an ellipsoid and a small hull with its normal fan stored (hullell): the exact
         # depth when a cheap test proves the pair overlapping; without that proof, again
         # after GJK once it finds the cores overlapping (below, in place of EPA); or a
@@ -2556,7 +2622,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
                               ra + rb + band,
                               _gjk_newton_pair(sa[0], sb[0])
-                              or _has_crease(sa[0]) or _has_crease(sb[0]))
+                              or _has_crease(sa[0]) or _has_crease(sb[0]), trace_on)
     iters = it
     if flag == _GJK_POLISHED:
         # cores apart, closest points from Newton's method: pb - pa == dist * n exactly

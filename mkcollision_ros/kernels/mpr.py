@@ -37,6 +37,15 @@ Outputs (``out`` float64[OUT_SIZE], A's frame, metres, normal from A to B):
     support calls on average, 57 at most, separated ones 2.3 on average).
   * a PLANE on either side returns ST_NOT_RUN (use kernels/analytic.py).
 Never writes NaN for finite input.
+
+Trace (for visual debugging, mkcollision_ros/trace.py): a ``buf`` of at least
+MPR_WS_ROWS + TR_HEADER_ROWS rows makes ``mpr_ws`` record its iterations in the rows
+from MPR_WS_ROWS on, a trace region as kernels/tracebuf.py lays out (its options row
+unused here): one record per support point of portal
+discovery (TR_MPR_DISCOVERY: v0, v1 after the first, v0-v2 after the second, v0-v3
+after each one of the discovery loop) and one per portal refinement step
+(TR_MPR_REFINEMENT: v0-v3, the portal at the start of the step; the last one is the
+final portal).  The results do not depend on it.
 """
 import math
 
@@ -48,6 +57,8 @@ from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
                         TOUCH_TOL)
 from .geometry import borrow_args, centre_core, minkowski_full_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
+from .tracebuf import (TR_HEADER_ROWS, TR_MPR_DISCOVERY, TR_MPR_REFINEMENT, trace_reset,
+                       trace_rows)
 
 # The working rows are w, wa, wb (5, 3): support points of D = A - B and of A and B,
 # row 0 the interior point v0, rows 1-3 the portal, row 4 the new support point.
@@ -207,9 +218,14 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
 @njit_kernel
 def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
     """``mpr`` with a caller-provided scratch buffer ``buf`` float64 (MPR_WS_ROWS, 3):
-    rows 0-4 w, 5-9 wa, 10-14 wb, 15-16 the two centres."""
+    rows 0-4 w, 5-9 wa, 10-14 wb, 15-16 the two centres.  At least
+    TR_HEADER_ROWS more rows: those are a trace region (module docstring), reset here
+    and filled with the iterations."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     out, buf = borrow(out), borrow(buf)
+    trace_on = buf.shape[0] >= MPR_WS_ROWS + TR_HEADER_ROWS
+    if trace_on:
+        trace_reset(buf, MPR_WS_ROWS)
     if sa[0] == PLANE or sb[0] == PLANE:
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)
@@ -248,7 +264,10 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
                 # origin on the segment v0-v1: the ray meets the boundary at v1, whose
                 # support plane has normal -v0 (exact supporting plane)
                 return _status(_write_support_plane(w, wa, out, 1.0), scale)
-        if _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k) <= 0.0:
+        h = _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k)
+        if trace_on:
+            trace_rows(buf, MPR_WS_ROWS, TR_MPR_DISCOVERY, w, k + 1)
+        if h <= 0.0:
             return _write_separated(w, wa, k, dx, dy, dz, out, float(k))
     nx, ny, nz = _cross_rows(w, 0, 1, 2)
     if nx * w[0, 0] + ny * w[0, 1] + nz * w[0, 2] > 0.0:
@@ -262,7 +281,10 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         iters += 1
         if not math.sqrt(nx * nx + ny * ny + nz * nz) > 0.0:
             break
-        if _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 3) <= 0.0:
+        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 3)
+        if trace_on:
+            trace_rows(buf, MPR_WS_ROWS, TR_MPR_DISCOVERY, w, 4)
+        if h <= 0.0:
             return _write_separated(w, wa, 3, nx, ny, nz, out, float(iters))
         # (v1 x v3) . v0 < 0: origin outside (v0, v1, v3), replace v2
         if _bary(w[1, 0], w[1, 1], w[1, 2], w[3, 0], w[3, 1], w[3, 2],
@@ -292,6 +314,8 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
 
     # ---- phase 3: portal refinement ----------------------------------------------------
     while True:
+        if trace_on:
+            trace_rows(buf, MPR_WS_ROWS, TR_MPR_REFINEMENT, w, 4)
         nx, ny, nz, ok = _portal_normal(w)
         if not ok:
             break                              # degenerate portal: report as is

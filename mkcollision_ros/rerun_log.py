@@ -52,6 +52,7 @@ time: a timestamp when it is a date after 1973, else a duration)):
 A blueprint lays these out: the 3D view, the series, the table, the events and one
 view per chosen pair.  Every archetype is logged with one call per step.
 """
+import math
 import os
 import shutil
 import signal
@@ -80,6 +81,7 @@ DEFAULT_CONNECT = "rerun+http://127.0.0.1:9876/proxy"
 DEFAULT_SERVE = ("127.0.0.1", 9876)
 SINK_FORMS = "off | save:<file.rrd> | connect[:<url>] | serve[:[<ip>:]<port>]"
 _DATE = 1e8          # s: a stamp beyond this (1973) is a date, else a duration
+MINKOWSKI_DIRECTIONS = 150   # support directions of the Minkowski difference's hull
 FLUSH_STEPS = 50     # the file sink's bound on steps held in memory (~1 ms a flush)
 _SHAPE_GROUPS = {"sphere": "ellipsoids", "ellipsoid": "ellipsoids", "box": "boxes",
                  "capsule": "capsules", "cylinder": "cylinders", "cone": "meshes",
@@ -269,12 +271,15 @@ class RerunLog:
     normal_length (m); point_size (m): contact point radius; table_rows: rows of the
     contacts table; memory_limit: the serve sink's buffer; web_port: the serve sink's
     web viewer (0: none); minkowski_method: the method traced for chosen pairs
-    ("auto": the one the pipeline would use for a single pair)."""
+    ("auto": the one the pipeline would use for a single pair); minkowski_period (s):
+    a chosen pair's Minkowski view is logged at its first step and then at most once
+    per period (building the hull of MINKOWSKI_DIRECTIONS support points takes tens of
+    milliseconds in Python; 0: every step)."""
 
     def __init__(self, sink, pairs=(), deep=0.01, normal_length=0.05, point_size=0.01,
                  table_rows=20, memory_limit="256MiB", web_port=9090,
                  application_id="mkcollision_ros", recording_id=None,
-                 minkowski_method="auto"):
+                 minkowski_method="auto", minkowski_period=0.5):
         self.sink = sink if isinstance(sink, Sink) else parse_sink(sink)
         if self.sink.kind == "off":
             raise ValueError("RerunLog needs a sink other than off")
@@ -282,6 +287,7 @@ class RerunLog:
         self.deep, self.normal_length = float(deep), float(normal_length)
         self.point_size, self.table_rows = float(point_size), int(table_rows)
         self.minkowski_method = minkowski_method
+        self.minkowski_period = float(minkowski_period)
         import rerun as rr
         self._rr = rr
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
@@ -294,6 +300,7 @@ class RerunLog:
         self._label_of = {}          # contact id -> its label
         self._styled = False         # the contacts' static colours and sizes are sent
         self._since_flush = 0
+        self._minkowski_at = {}      # pair -> when its Minkowski view was last logged
         self.rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         self.rec.log("stats", rr.SeriesLines(names=["contacts", "touching pairs",
                                                     "candidate pairs"]), static=True)
@@ -544,9 +551,14 @@ class RerunLog:
             rec.log(f"{root}/note", rr.TextLog("a plane has no support mapping: no "
                                                "Minkowski difference", level="WARN"))
             return
+        now = time.monotonic()
+        if now - self._minkowski_at.get((a, b), -math.inf) < self.minkowski_period:
+            return
+        self._minkowski_at[(a, b)] = now
         pa = (scene.positions[ia], scene.orientations[ia])
         pb = (scene.positions[ib], scene.orientations[ib])
-        verts, tris = minkowski_difference(ba.shape, pa, bb.shape, pb)
+        verts, tris = minkowski_difference(ba.shape, pa, bb.shape, pb,
+                                           directions=MINKOWSKI_DIRECTIONS)
         tr = trace_pair(ba.shape, pa, bb.shape, pb, method=self.minkowski_method)
         r = tr.result
         gap = np.asarray(r.point_a) - np.asarray(r.point_b)
@@ -558,11 +570,15 @@ class RerunLog:
                                               labels=["origin"]))
         rec.log(f"{root}/answer", rr.Arrows3D(
             origins=[[0.0, 0.0, 0.0]], vectors=[gap], colors=DEEP,
-            labels=[f"{r.status.name.lower()} {r.distance:+.6g} m by {tr.answered_by}"]))
+            labels=[f"{r.status.name.lower()} {r.distance:+.6g} m by {tr.answered_by}; "
+                    f"traced: {tr.traced}"
+                    + (f" on the cores (grown by {tr.core_radius:.4g} m)"
+                       if tr.traced == "gjk_epa" and tr.core_radius > 0 else "")]))
         for i, (stage, portal) in enumerate(tr.mpr_portals):
             rec.set_time("iteration", sequence=i)
-            loop = np.concatenate([portal, portal[:1]])
-            rec.log(f"{root}/mpr/portal", rr.LineStrips3D([loop], labels=[stage]))
+            labels = [stage] + [""] * (len(portal) - 1)
+            rec.log(f"{root}/mpr/portal", rr.LineStrips3D(_edges(portal)),
+                    rr.Points3D(portal, radii=0.005, labels=labels))
         for i, simplex in enumerate(tr.gjk_simplices):
             rec.set_time("iteration", sequence=i)
             rec.log(f"{root}/gjk/simplex", rr.LineStrips3D(_edges(simplex)),

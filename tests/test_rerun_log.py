@@ -341,3 +341,46 @@ def test_a_group_at_rest_is_sent_once(tmp_path):
     moved = [r for r in rec["/world/bodies/ellipsoids"] if r["step"] > 1]
     assert all(set(r) - {"step", "stamp", "log_time"}
                == {"Ellipsoids3D:centers", "Ellipsoids3D:quaternions"} for r in moved)
+
+
+def test_a_chosen_pair_shows_its_minkowski_difference_and_iterations(tmp_path):
+    from mkcollision_ros import collide
+    from mkcollision_ros.trace import trace_pair
+    path = tmp_path / "pair.rrd"
+    bodies = [{"name": "egg", "shape": {"type": "ellipsoid", "radii": [0.5, 0.3, 0.2]}},
+              {"name": "rock", "shape": {"type": "convex", "points": ROCK.tolist()}}]
+    p = Pipeline(bodies, rerun=RerunLog(f"save:{path}", pairs=["egg:rock", "egg:gone"],
+                                        minkowski_period=0.0))
+    q = np.array([[0.0, 0, 0, 1], quat_axis([1, 2, 3], 0.7)])
+    pos = np.array([[0.0, 0, 0], [0.45, 0.1, 0.0]])
+    p.step(pos, q, 0.0)
+    p.close()
+    rec = read_recording(path)
+    root = "/minkowski/egg-rock"
+    shape_a, shape_b = bodies[0]["shape"], bodies[1]["shape"]
+    want = collide(shape_a, (pos[0], q[0]), shape_b, (pos[1], q[1]))
+    assert want.touching
+    # the difference contains the origin (they touch) and the answer's point a - b
+    verts = np.array(rec[f"{root}/difference"][0]["Mesh3D:vertex_positions"])
+    tris = np.array(rec[f"{root}/difference"][0]["Mesh3D:triangle_indices"])
+    a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+    n = np.cross(b - a, c - a)
+    assert np.all(np.einsum("ij,ij->i", n, -a) < 0)          # origin behind every face
+    arrow = rec[f"{root}/answer"][0]
+    np.testing.assert_allclose(arrow["Arrows3D:vectors"][0], want.point_a - want.point_b,
+                               atol=1e-6)
+    # every iteration the trace recorded, one per index of the iteration timeline
+    tr = trace_pair(shape_a, (pos[0], q[0]), shape_b, (pos[1], q[1]))
+    logged = (rec.get(f"{root}/gjk/simplex", []) + rec.get(f"{root}/epa/polytope", [])
+              + rec.get(f"{root}/mpr/portal", []))
+    n_iter = len(tr.gjk_simplices) + len(tr.epa_polytopes) + len(tr.mpr_portals)
+    assert n_iter > 0 and len(logged) == n_iter
+    assert sorted(r["iteration"] for r in logged) == list(range(n_iter))
+    if tr.epa_polytopes:
+        last = [r for r in logged if "Mesh3D:vertex_positions" in r][-1]
+        np.testing.assert_allclose(last["Mesh3D:vertex_positions"], tr.epa_polytopes[-1][0],
+                                   atol=1e-6)
+    note = rec["/minkowski/egg-gone/note"][0]["TextLog:text"][0]
+    assert "not in the scene" in note
+    views = {(k, o) for k, o, _ in read_blueprint_views(path)}
+    assert ("3D", "minkowski/egg-rock") in views and ("3D", "world") in views

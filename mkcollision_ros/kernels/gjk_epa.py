@@ -23,7 +23,10 @@ Phases of ``gjk_epa``
      those facing the origin), and a step that
      does not shrink |v| is undone (robust to the sliver simplices of curved shapes);
      if the duality gap is then still above GJK_POLISH_TOL |v|^2, apart is not proved
-     and the pair takes phase 3's fallback (_caps_fallback).
+     and the pair takes phase 3's fallback (_caps_fallback); likewise when a support
+     repeats a simplex vertex with the gap that wide (v then round-off near the
+     origin: a needle-thin difference, e.g. a long cone or capsule core against a
+     tiny body at its centre).
      Stop on the duality gap |v|^2 - v.w <= max(GJK_REL_TOL |v|^2, GJK_ABS_TOL scale |v|),
      or, when the caller gave a distance cutoff (``gjk_epa_ws``), as soon as a support
      plane proves the pair farther apart than the cutoff (v.w / |v| is a lower bound).
@@ -438,7 +441,9 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish):
             if W[i, 0] == w[0] and W[i, 1] == w[1] and W[i, 2] == w[2]:
                 dup = True
         if dup:
-            flag = _GJK_APART
+            # a repeated support proves the gap closed, unless round-off made v (then
+            # tiny, near the origin) a direction of noise: the gap tells
+            flag = _GJK_STALL if gap > GJK_POLISH_TOL * vv else _GJK_APART
             break
         # keep the current simplex in case the update makes no progress
         n_prev = n
@@ -2701,8 +2706,8 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     holds (both are support values at a unit direction, upper bounds of the depth), or
     in any case after a stall, with the touching rule's status; a FAILED pair that
     MPR finds in contact keeps the smaller bound with that status.  ``out`` (A's
-    frame, method M_GJK_EPA) and the returned status stay as they were when neither
-    applies.  Scratch: the EPA vertex rows and face offsets of ``ws``, free once EPA
+    frame, method M_GJK_EPA; iterations: MPR's supports added) and the returned status
+    stay as they were, iterations too, when neither applies.  Scratch: the EPA vertex rows and face offsets of ``ws``, free once EPA
     has ended (and unused after GJK)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws, out = borrow_gjk_workspace(ws), borrow(out)
@@ -2717,7 +2722,6 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
         return sc
     sm = mpr_ws(sa, sb, verts, r_ab, t_ab, tmp, ws[0][_V:_V + MPR_WS_ROWS])
     iters += tmp[OUT_ITERS] + 1
-    out[OUT_ITERS] = iters
     if sm != ST_PENETRATING and sm != ST_TOUCHING:
         return st
     nx, ny, nz = tmp[OUT_NORMAL], tmp[OUT_NORMAL + 1], tmp[OUT_NORMAL + 2]
@@ -2726,6 +2730,7 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     if not (stalled or -h > out[OUT_DIST]):
         if st == ST_FAILED:
             # EPA's own bound is the smaller one: the pair is in contact (MPR)
+            out[OUT_ITERS] = iters
             return classify(out[OUT_DIST], scale)
         return st
     pa, pb = ws[0][_T3 + 1], ws[0][_T3 + 2]

@@ -2703,8 +2703,9 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     "apart" is not proved): the pair's closed form when it has one
     (analytic.collide_analytic, exact), else MPR on the whole shapes.  When MPR finds
     contact, its normal is taken if h_{A-B} there is smaller than the depth ``out``
-    holds (both are support values at a unit direction, upper bounds of the depth), or
-    in any case after a stall, with the touching rule's status; a FAILED pair that
+    holds (both are support values at a unit direction, upper bounds of the depth);
+    after a stall, the one of MPR's and GJK's normals with the smaller h, with the
+    touching rule's status; a FAILED pair that
     MPR finds in contact keeps the smaller bound with that status.  ``out`` (A's
     frame, method M_GJK_EPA; iterations: MPR's supports added) and the returned status
     stay as they were, iterations too, when neither applies.  Scratch: the EPA vertex rows and face offsets of ``ws``, free once EPA
@@ -2727,6 +2728,15 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     nx, ny, nz = tmp[OUT_NORMAL], tmp[OUT_NORMAL + 1], tmp[OUT_NORMAL + 2]
     ax, ay, az, bx, by, bz = minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, nx, ny, nz)
     h = nx * (ax - bx) + ny * (ay - by) + nz * (az - bz)
+    if stalled:
+        # GJK's own normal is an upper bound too (h there): the smaller of the two
+        gx, gy, gz = out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2]
+        qx, qy, qz, px, py, pz = minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, gx, gy, gz)
+        hg = gx * (qx - px) + gy * (qy - py) + gz * (qz - pz)
+        iters += 1
+        if hg < h:
+            nx, ny, nz, h = gx, gy, gz, hg
+            ax, ay, az, bx, by, bz = qx, qy, qz, px, py, pz
     if not (stalled or -h > out[OUT_DIST]):
         if st == ST_FAILED:
             # EPA's own bound is the smaller one: the pair is in contact (MPR)

@@ -3,9 +3,10 @@ Plain Python + numba kernels, no ROS.
 
 ``cross_check`` runs MPR and GJK/EPA on the same pairs at the same poses and reports
 where they disagree: on whether the pair touches, on the depth by more than
-``depth_tol`` (m), or on the normal by more than ``angle_tol`` (rad).  ``repro`` writes
-one pair as a line of Python, every number at 17 significant digits (exact for
-float64), that calls ``mkcollision_ros.collide`` on the same shapes and poses.
+``depth_tol`` (m), or on the normal by more than ``angle_tol`` (rad).  ``repro`` (a
+scene's pair) and ``repro_call`` (two shape dicts at world poses) write one pair as a
+line of Python, every number at 17 significant digits (exact for float64), that calls
+``mkcollision_ros.collide`` on the same shapes and poses.
 """
 import math
 from typing import NamedTuple
@@ -46,16 +47,23 @@ def _shape_repr(shape):
     return "{" + ", ".join(f"{k!r}: {value(v)}" for k, v in shape.items()) + "}"
 
 
-def repro(scene, a, b, method="auto"):
-    """A line of Python reproducing pair (a, b) of ``scene`` at its current poses."""
+def repro_call(shape_a, pose_a, shape_b, pose_b, method="auto"):
+    """A line of Python calling ``collide`` on two shape dicts at world poses
+    ``(position (3,), quat_xyzw (4,))``, every number at 17 significant digits."""
     parts = []
-    for s in (a, b):
-        body = scene.body(scene.names[s])
-        pos, quat = scene.positions[s], scene.orientations[s]
-        parts.append(f"{_shape_repr(body.shape)}, "
+    for shape, (pos, quat) in ((shape_a, pose_a), (shape_b, pose_b)):
+        parts.append(f"{_shape_repr(shape)}, "
                      f"([{', '.join(_g(x) for x in pos)}], "
                      f"[{', '.join(_g(x) for x in quat)}])")
     return f"collide({parts[0]}, {parts[1]}, method={method!r})"
+
+
+def repro(scene, a, b, method="auto"):
+    """A line of Python reproducing pair (a, b) of ``scene`` at its current poses."""
+    return repro_call(scene.body(scene.names[a]).shape,
+                      (scene.positions[a], scene.orientations[a]),
+                      scene.body(scene.names[b]).shape,
+                      (scene.positions[b], scene.orientations[b]), method)
 
 
 def cross_check(scene, pairs, depth_tol, angle_tol):

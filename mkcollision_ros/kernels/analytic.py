@@ -508,7 +508,23 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
                                                   q2x, q2y, q2z)
     dx, dy, dz = c2x - c1x, c2y - c1y, c2z - c1z
     dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-    if dn > tiny:
+    skew = den > 1e-14 * a * e and 0.0 < s < 1.0 and 0.0 < t < 1.0
+    if skew:
+        # closest points inside both segments of skew axes: along the common
+        # perpendicular d1 x d2, at the lines' offset along it.  c2 - c1 carries the
+        # round-off of s and t (~ eps |d| / sin^2 of the axes' angle), which can exceed
+        # ``tiny`` where the axes cross: its direction is then noise
+        nx = d1y * d2z - d1z * d2y
+        ny = d1z * d2x - d1x * d2z
+        nz = d1x * d2y - d1y * d2x
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / nn, ny / nn, nz / nn
+        off = -(nx * rx + ny * ry + nz * rz)
+        if off < 0.0:
+            nx, ny, nz, off = -nx, -ny, -nz, -off
+        if off > tiny:
+            return _finish_s(c1x, c1y, c1z, off, nx, ny, nz, ra, rb, out)
+    elif dn > tiny:
         return _point_point_s(c1x, c1y, c1z, c2x, c2y, c2z, ra, rb, out)
     if den > 1e-14 * a * e:
         # crossing axes: separate along the common perpendicular d1 x d2 (|d1 x d2|^2

@@ -21,7 +21,12 @@ Phases of ``gjk_epa``
      geometry.support_core).  Sub-simplex solver: Voronoi-region tests (Ericson), face
      weights from cross products, every face holding the new vertex tried (not only
      those facing the origin), and a step that
-     does not shrink |v| is undone (robust to the sliver simplices of curved shapes).
+     does not shrink |v| is undone (robust to the sliver simplices of curved shapes);
+     if the duality gap is then still above GJK_POLISH_TOL |v|^2, apart is not proved
+     and the pair takes phase 3's fallback (_caps_fallback); likewise when a support
+     repeats a simplex vertex with the gap that wide (v then round-off near the
+     origin: a needle-thin difference, e.g. a long cone or capsule core against a
+     tiny body at its centre).
      Stop on the duality gap |v|^2 - v.w <= max(GJK_REL_TOL |v|^2, GJK_ABS_TOL scale |v|),
      or, when the caller gave a distance cutoff (``gjk_epa_ws``), as soon as a support
      plane proves the pair farther apart than the cutoff (v.w / |v| is a lower bound).
@@ -141,7 +146,11 @@ Phases of ``gjk_epa``
      reported; the status is ST_FAILED only if the gap to the EPA lower bound exceeds
      EPA_FAIL_GAP * scale and that lower bound does not by itself prove penetration (a
      pair certainly in contact always yields its contact, e.g. to the pipeline, which
-     drops failed pairs).
+     drops failed pairs).  Then (_caps_fallback) a pair with a closed form takes it
+     (analytic.collide_analytic, exact), and any other takes MPR's normal where its
+     support value is the smaller upper bound of the depth, and MPR's contact in place
+     of FAILED (bench/fuzz.py found both: a tiny capsule inside a large one FAILED, a
+     small body deep in a large cylinder or cone up to 2e-5 * scale too deep).
   Witness points: barycentric coordinates of the closest point on the final simplex /
   EPA face, applied to the support points of A and B, then moved out by the radii.
   When the origin's projection falls outside the final EPA face (sliver faces of flat
@@ -203,17 +212,18 @@ from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL
                         POLISH_STEP_DONE, SPHERE,
                         ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
                         TOUCH_TOL)
-from .analytic import _point_box, _point_cylinder
+from .analytic import _point_box, _point_cylinder, classify, collide_analytic
 from .boxcyl import BC_MAX_LEVEL, box_cylinder_depth
 from .boxell import ellipsoid_box_depth, face_room
 from .cylcyl import (cylinders_depth, ellipsoid_cylinder_depth, hull_cylinder_depth,
                      segment_cylinder_depth, sides_crossing)
 from .geometry import (borrow_args, borrow_pose, inflation, meet, minkowski_core_xyz,
-                       shape_scale)
+                       minkowski_full_xyz, shape_scale)
 from .hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED,
                       ellipsoid_hull_depth, ellipsoid_hull_pair)
 from .hullcyl import cylinder_hull_depth, cylinder_hull_pair
 from .jit import borrow, njit_inline, njit_kernel
+from .mpr import MPR_WS_ROWS, mpr_ws
 from .simplex import _closest_simplex, _tri_closest
 from .tracebuf import TR_EPA, TR_GJK, TR_HEADER_ROWS, trace_open, trace_reset, trace_rows
 
@@ -302,6 +312,8 @@ _GJK_CAP = 2         # iteration cap hit
 _GJK_BOUND = 3       # stopped early: the cores are farther apart than the caller's stop
                      # distance (v is not the closest point; the returned bound is)
 _GJK_POLISHED = 4    # apart, minimum found by _newton_min_support (ws t3 rows 15-18)
+_GJK_STALL = 5       # no progress in floating point (a sliver simplex) with the duality
+                     # gap still above GJK_POLISH_TOL |v|^2: apart is not proved
 
 
 @njit_inline
@@ -335,8 +347,8 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     _GJK_POLISHED, else go on.
     ``trace_on`` True: the simplices are recorded in ws[0]'s trace region (module
     docstring, "Trace").
-    Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND,
-    the lower bound v.w / |v| for _GJK_BOUND, else 0).
+    Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND/
+    _GJK_STALL, the lower bound v.w / |v| for _GJK_BOUND, else 0).
     Inlined into its two callers: as a called function it took 0.3 us more per deep pair
     (cylinder-cylinder 4.26 -> 3.97 us, box-convex 2.49 -> 2.19, bench/deep_pairs.py),
     more than the call itself (its ~75 words of array structs) can explain; inlining
@@ -460,7 +472,9 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
             if W[i, 0] == w[0] and W[i, 1] == w[1] and W[i, 2] == w[2]:
                 dup = True
         if dup:
-            flag = _GJK_APART
+            # a repeated support proves the gap closed, unless round-off made v (then
+            # tiny, near the origin) a direction of noise: the gap tells
+            flag = _GJK_STALL if gap > GJK_POLISH_TOL * vv else _GJK_APART
             break
         # keep the current simplex in case the update makes no progress
         n_prev = n
@@ -494,7 +508,12 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
                     WB[q, c] = WB_prev[q, c]
             for c in range(3):
                 v[c] = v_prev[c]
-            flag = _GJK_APART if vv > zero2 else _GJK_OVERLAP
+            if vv <= zero2:
+                flag = _GJK_OVERLAP
+            elif gap > GJK_POLISH_TOL * vv:
+                flag = _GJK_STALL
+            else:
+                flag = _GJK_APART
             break
         if trace_on:
             trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
@@ -2484,7 +2503,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
     n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False, False)
-    if flag != _GJK_APART:
+    if flag != _GJK_APART and flag != _GJK_STALL:
         return 0
     fs, fv = ws[0], ws[1]
     for c in range(3):
@@ -2678,6 +2697,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
             if (vn * vn - _dot(v, w)) / vn > 1e-6 * scale:
                 st = ST_FAILED
+        if flag == _GJK_STALL:
+            st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, True)
         return st
     if fan == HE_UNPROVED:
         # GJK found the cores overlapping: the fan's exact depth in place of EPA
@@ -2733,4 +2754,63 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     if (not conv and not gap <= EPA_FAIL_GAP * scale
             and not res[0] - gap + ra + rb > TOUCH_TOL * scale):
         st = ST_FAILED
+    if not conv:
+        st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, False)
     return st
+
+
+@njit_kernel
+def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
+    """EPA hit its caps (phase 3: a valley of nearly equally deep directions that the
+    polytope cannot enclose to tolerance, such as a small body deep inside a large
+    body of revolution, where the pattern-searched bound can stay ~1e-5 * scale too
+    deep), or GJK stalled (``stalled``: a sliver simplex, e.g. a long capsule's core
+    against a tiny body, made no progress while the duality gap was wide, so its
+    "apart" is not proved): the pair's closed form when it has one
+    (analytic.collide_analytic, exact), else MPR on the whole shapes.  When MPR finds
+    contact, its normal is taken if h_{A-B} there is smaller than the depth ``out``
+    holds (both are support values at a unit direction, upper bounds of the depth);
+    after a stall, the one of MPR's and GJK's normals with the smaller h, with the
+    touching rule's status; a FAILED pair that
+    MPR finds in contact keeps the smaller bound with that status.  ``out`` (A's
+    frame, method M_GJK_EPA; iterations: MPR's supports added) and the returned status
+    stay as they were, iterations too, when neither applies.  Scratch: the EPA vertex rows and face offsets of ``ws``, free once EPA
+    has ended (and unused after GJK)."""
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    ws, out = borrow_gjk_workspace(ws), borrow(out)
+    tmp = ws[1][_FD:_FD + OUT_SIZE]
+    iters = out[OUT_ITERS]
+    sc = collide_analytic(sa, sb, verts, r_ab, t_ab, tmp)
+    if sc != ST_NOT_RUN:
+        for c in range(OUT_SIZE):
+            out[c] = tmp[c]
+        out[OUT_ITERS] = iters + tmp[OUT_ITERS]
+        out[OUT_METHOD] = M_GJK_EPA
+        return sc
+    sm = mpr_ws(sa, sb, verts, r_ab, t_ab, tmp, ws[0][_V:_V + MPR_WS_ROWS])
+    iters += tmp[OUT_ITERS] + 1
+    if sm != ST_PENETRATING and sm != ST_TOUCHING:
+        return st
+    nx, ny, nz = tmp[OUT_NORMAL], tmp[OUT_NORMAL + 1], tmp[OUT_NORMAL + 2]
+    ax, ay, az, bx, by, bz = minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, nx, ny, nz)
+    h = nx * (ax - bx) + ny * (ay - by) + nz * (az - bz)
+    if stalled:
+        # GJK's own normal is an upper bound too (h there): the smaller of the two
+        gx, gy, gz = out[OUT_NORMAL], out[OUT_NORMAL + 1], out[OUT_NORMAL + 2]
+        qx, qy, qz, px, py, pz = minkowski_full_xyz(sa, sb, verts, r_ab, t_ab, gx, gy, gz)
+        hg = gx * (qx - px) + gy * (qy - py) + gz * (qz - pz)
+        iters += 1
+        if hg < h:
+            nx, ny, nz, h = gx, gy, gz, hg
+            ax, ay, az, bx, by, bz = qx, qy, qz, px, py, pz
+    if not (stalled or -h > out[OUT_DIST]):
+        if st == ST_FAILED:
+            # EPA's own bound is the smaller one: the pair is in contact (MPR)
+            out[OUT_ITERS] = iters
+            return classify(out[OUT_DIST], scale)
+        return st
+    pa, pb = ws[0][_T3 + 1], ws[0][_T3 + 2]
+    pa[0], pb[0] = meet(ax, bx, -h * nx)
+    pa[1], pb[1] = meet(ay, by, -h * ny)
+    pa[2], pb[2] = meet(az, bz, -h * nz)
+    return _set_out(out, -h, nx, ny, nz, pa, pb, np.int64(iters), scale)

@@ -41,6 +41,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from .rerun_log import stop_group
+
 VULKAN_PACKAGE = "mesa-vulkan-drivers"
 _ICD_DIRS = ("/usr/share/vulkan/icd.d", "/etc/vulkan/icd.d", "/usr/local/share/vulkan/icd.d")
 _LOADER_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64",
@@ -113,16 +115,6 @@ def _is_url(source):
     return "://" in str(source)
 
 
-def stop_group(proc):
-    """Kill the whole process group of ``proc`` (started with start_new_session=True):
-    rerun's Python wrapper leaves its child running when only the wrapper is killed."""
-    try:
-        os.killpg(proc.pid, signal.SIGKILL)
-    except ProcessLookupError:
-        pass
-    proc.wait()
-
-
 def parse_time(text):
     """``"step=12"`` -> ("step", "12"); the value is read against the timeline's type
     once the recording has loaded.  ValueError for anything without ``=``."""
@@ -184,7 +176,7 @@ def render_png(source, out_path, size=(1280, 800), timeout=60.0, blueprint=None,
                 raise RenderError(f"{exc} (source {source})"
                                   + (": " + " | ".join(tail) if tail else "")) from None
             finally:
-                stop_group(proc)
+                stop_group(proc, signals=(signal.SIGKILL,))
     out.write_bytes(png)
     return out
 

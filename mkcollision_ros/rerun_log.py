@@ -345,7 +345,7 @@ class RerunLog:
         self.rec.flush()
         self.rec.disconnect()
         if self._viewer is not None:
-            _stop_group(self._viewer)
+            stop_group(self._viewer)
             self._viewer = None
 
     # -- one step -----------------------------------------------------------------
@@ -591,10 +591,11 @@ class RerunLog:
         rec.disable_timeline("iteration")
 
 
-def _stop_group(proc, timeout=5.0):
+def stop_group(proc, signals=(signal.SIGTERM, signal.SIGKILL), timeout=5.0):
     """Stop a child started with its own session and everything in its process group
-    (the ``rerun`` wrapper leaves the real viewer running otherwise)."""
-    for sig in (signal.SIGTERM, signal.SIGKILL):
+    (the ``rerun`` wrapper leaves the real viewer running otherwise): each signal in
+    turn to the group, then up to ``timeout`` s for the group to be gone."""
+    for sig in signals:
         try:
             os.killpg(proc.pid, sig)
         except ProcessLookupError:

@@ -13,9 +13,11 @@ import pytest
 from mkcollision_ros.arbiters import quat_matrices
 from mkcollision_ros.meshes import shape_mesh
 from mkcollision_ros.pipeline import Pipeline
+from mkcollision_ros.render import free_port
 from mkcollision_ros.rerun_log import (DEEP, FREE, PLANE, TOUCHING, RerunLog, Sink,
                                        latest_at, parse_pairs, parse_sink,
-                                       read_blueprint_views, read_recording, rgba)
+                                       read_blueprint_views, read_recording, rgba,
+                                       stop_group)
 from oracles import quat_axis
 
 ROCK = np.random.default_rng(3).normal(size=(12, 3)) * 0.3
@@ -262,14 +264,8 @@ def _listening(port):
     return found
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def test_serve_binds_loopback_with_a_web_viewer():
-    grpc_port, web_port = _free_port(), _free_port()
+    grpc_port, web_port = free_port(), free_port()
     log = RerunLog(f"serve:{grpc_port}", web_port=web_port, memory_limit="16MiB")
     try:
         assert _listening(grpc_port) == ["127.0.0.1"]
@@ -295,7 +291,7 @@ def test_serve_binds_loopback_with_a_web_viewer():
 def test_connect_streams_to_a_running_viewer(tmp_path):
     """A `rerun` process listening on loopback saves what it receives; the steps logged
     through connect:<url> arrive in it."""
-    port, received = _free_port(), tmp_path / "received.rrd"
+    port, received = free_port(), tmp_path / "received.rrd"
     server = subprocess.Popen(["rerun", "--bind", "127.0.0.1", "--port", str(port),
                                "--save", str(received)], stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, start_new_session=True)
@@ -318,8 +314,7 @@ def test_connect_streams_to_a_running_viewer(tmp_path):
         assert [r["step"] for r in rows] == [1, 2, 3]
         assert all(r["depth"] == [pytest.approx(0.1)] for r in rows)
     finally:
-        from mkcollision_ros.rerun_log import _stop_group
-        _stop_group(server)
+        stop_group(server)
 
 
 def test_a_group_at_rest_is_sent_once(tmp_path):

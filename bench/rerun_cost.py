@@ -2,18 +2,19 @@
 bodies of mixed shapes (``common.scene``, density 0.2 touching pairs per body), file
 sink, one process.
 
-For each size: the same seeded moving poses go through a Pipeline; after each step the
-log call is timed (wall: what the step's thread waits; CPU: ``time.process_time`` over
-the call, every thread of the process, so rerun's own encoder threads count when they
-run in it) over ``--steps`` steps after ``--warm`` untimed ones.  The logger holds the
-per-step data and sends it as columns every ``--batch-steps`` steps (RerunLog's
-batch_steps; 1: every step), so a step's cost is the mean over the steps, the sends
-and the final ``close`` included; the median and p99 of single calls show how it is
-spread.  The recording's size per step is reported too.
+For each size: the same seeded moving poses go through a Pipeline at ``--rate`` steps a
+second (100; 10,000 bodies at 30), and after each step ``RerunLog.log_step`` is timed:
+wall and CPU of the calling thread (what a step waits for: the pickling and the
+hand-over to the writer thread), mean and p99 over ``--steps`` steps after ``--warm``
+untimed ones.  The recorder runs in the logger's child process; its CPU time per step
+is reported beside, and ``close`` (the child finishing the file).  The recorder holds
+the per-step data and sends it as columns every ``--batch-steps`` steps.  The
+recording's size per step is reported too.
 
 Memory (``--memory-seconds S``): one 1,000-body pipeline logging at 100 Hz for S
 seconds to each sink in turn (file, then serve with its 256 MiB buffer and no viewer);
-the process's resident memory is sampled every 10 s.
+the resident memory of this process and the logger's child together is sampled every
+10 s.
 
     PYTHONPATH=. .venv/bin/python bench/rerun_cost.py [--sizes 100 1000 10000]
     PYTHONPATH=. .venv/bin/python bench/rerun_cost.py --memory-seconds 600 [--sinks save serve]
@@ -33,15 +34,21 @@ from mkcollision_ros.pipeline import Pipeline  # noqa: E402
 from mkcollision_ros.rerun_log import RerunLog  # noqa: E402
 
 
-def _rss_mb():
-    with open("/proc/self/status") as f:
+def _rss_mb(pid="self"):
+    with open(f"/proc/{pid}/status") as f:
         for line in f:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024.0
     return float("nan")
 
 
-def cost(n, steps, warm, seed, batch_steps):
+def _cpu_s(pid):
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def cost(n, steps, warm, seed, batch_steps, rate):
     bodies, pos, quat, _ = scene(n, 0.2, seed)
     p = Pipeline(bodies)
     rng = np.random.default_rng(seed)
@@ -49,27 +56,32 @@ def cost(n, steps, warm, seed, batch_steps):
         path = os.path.join(tmp, "cost.rrd")
         log = RerunLog(f"save:{path}", batch_steps=batch_steps, batch_seconds=1e9)
         wall, cpu, step_ms, contacts = [], [], [], []
+        period = 1.0 / rate
+        nxt = time.perf_counter()
         for k in range(warm + steps):
+            if k == warm:
+                child0 = _cpu_s(log.process.pid)
             pos, quat = move(rng, pos, quat)
             t = time.perf_counter()
             res = p.step(pos, quat, 0.01 * k)
-            t1, c1 = time.perf_counter(), time.process_time()
+            t1, c1 = time.perf_counter(), time.thread_time()
             log.log_step(p.scene, res, k)
-            t2, c2 = time.perf_counter(), time.process_time()
+            t2, c2 = time.perf_counter(), time.thread_time()
             if k >= warm:
                 step_ms.append(1e3 * (t1 - t))
                 wall.append(1e3 * (t2 - t1))
                 cpu.append(1e3 * (c2 - c1))
                 contacts.append(len(res.depth))
-        t1, c1 = time.perf_counter(), time.process_time()
+            nxt += period
+            time.sleep(max(0.0, nxt - time.perf_counter()))
+        t1 = time.perf_counter()
+        child = _cpu_s(log.process.pid) - child0
         log.close()
-        close_wall = 1e3 * (time.perf_counter() - t1)
-        close_cpu = 1e3 * (time.process_time() - c1)
+        close_s = time.perf_counter() - t1
         size = os.path.getsize(path) / (warm + steps) / 1024.0
-    return dict(bodies=n, contacts=int(np.median(contacts)),
-                step=np.median(step_ms), mean=(sum(wall) + close_wall) / steps,
-                cpu=(sum(cpu) + close_cpu) / steps, median=np.median(wall),
-                p99=np.percentile(wall, 99), kib=size)
+    return dict(bodies=n, rate=rate, contacts=int(np.median(contacts)),
+                step=np.median(step_ms), mean=np.mean(wall), p99=np.percentile(wall, 99),
+                cpu=np.mean(cpu), child=1e3 * child / steps, close=close_s, kib=size)
 
 
 def memory(seconds, seed, kinds=("save", "serve")):
@@ -86,7 +98,7 @@ def memory(seconds, seed, kinds=("save", "serve")):
             while True:
                 now = time.monotonic() - start
                 if now >= nxt:
-                    samples.append((round(now), _rss_mb()))
+                    samples.append((round(now), _rss_mb() + _rss_mb(p.rerun.process.pid)))
                     nxt += 10.0
                 if now >= seconds:
                     break
@@ -106,6 +118,8 @@ def main():
     ap.add_argument("--warm", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--batch-steps", type=int, default=10)
+    ap.add_argument("--rate", type=float, default=100.0,
+                    help="steps a second (10,000 bodies: at most 30)")
     ap.add_argument("--memory-seconds", type=float, default=0.0)
     ap.add_argument("--sinks", nargs="+", default=["save", "serve"],
                     choices=["save", "serve"], help="sinks of the memory run")
@@ -119,15 +133,16 @@ def main():
                   f"(first {first:.0f}, peak {peak:.0f}, last {samples[-1][1]:.0f}) |",
                   flush=True)
         return
-    print("| bodies | contacts | step ms | log ms a step (wall, mean) | log CPU ms a step "
-          "| one call: median, p99 ms | KiB a step |\n|---|---|---|---|---|---|---|")
+    print("| bodies | rate Hz | contacts | step ms | log_step ms (mean, p99) | its CPU ms "
+          "| logger process CPU ms a step | close s | KiB a step |\n"
+          "|---|---|---|---|---|---|---|---|---|")
     for n in a.sizes:
+        rate = a.rate if n < 10000 else min(a.rate, 30.0)
         r = cost(n, a.steps if n < 10000 else max(20, a.steps // 5), a.warm, a.seed,
-                 a.batch_steps)
-        print(f"| {r['bodies']} | {r['contacts']} | {r['step']:.3f} | {r['mean']:.3f} | "
-              f"{r['cpu']:.3f} | {r['median']:.3f}, {r['p99']:.3f} | {r['kib']:.1f} |",
-              flush=True)
-
+                 a.batch_steps, rate)
+        print(f"| {r['bodies']} | {r['rate']:g} | {r['contacts']} | {r['step']:.3f} | "
+              f"{r['mean']:.3f}, {r['p99']:.3f} | {r['cpu']:.3f} | {r['child']:.2f} | "
+              f"{r['close']:.2f} | {r['kib']:.1f} |", flush=True)
 
 if __name__ == "__main__":
     main()

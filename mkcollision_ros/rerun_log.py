@@ -61,9 +61,13 @@ sees a step at most ``batch_seconds`` late; ``close`` sends what is held.
 """
 import math
 import os
+import pickle
+import queue
 import shutil
 import signal
 import subprocess
+import sys
+import threading
 import time
 from typing import NamedTuple
 
@@ -92,6 +96,7 @@ MINKOWSKI_DIRECTIONS = 150   # support directions of the Minkowski difference's 
 FLUSH_STEPS = 50     # the file sink's bound on steps held in memory (~1 ms a flush)
 BATCH_STEPS = 10     # steps held before they are sent as columns (module docstring)
 BATCH_SECONDS = 0.1  # s: the longest a step is held
+QUEUE_STEPS = 50     # steps waiting for the logger process before a step waits too
 _SHAPE_GROUPS = {"sphere": "ellipsoids", "ellipsoid": "ellipsoids", "box": "boxes",
                  "capsule": "capsules", "cylinder": "cylinders", "cone": "meshes",
                  "convex": "meshes", "plane": "meshes"}
@@ -272,8 +277,9 @@ def _markdown_table(names, res, rows):
     return head + "\n".join(lines)
 
 
-class RerunLog:
-    """Logs steps to one rerun sink (module docstring).
+class _Recorder:
+    """The logging itself, in the logger's process (RerunLog starts it in a child):
+    steps to one rerun sink (module docstring).
 
     sink: a SINK_FORMS string or a Sink; pairs: chosen pairs for the Minkowski view
     ("a:b" or (a, b)); deep (m): the depth from which a body is drawn DEEP;
@@ -413,6 +419,7 @@ class RerunLog:
 
     def _send_held(self):
         """One send_columns per entity and run of steps with the same fields."""
+        import pyarrow as pa
         rr, rec = self._rr, self.rec
         held, self._held, self._held_steps = self._held, {}, 0
         for (path, kind), rows in held.items():
@@ -435,7 +442,9 @@ class RerunLog:
                     if isinstance(values[0], list):
                         data = [x for v in values for x in v]
                     else:
-                        data = np.concatenate([np.asarray(v) for v in values])
+                        data = np.concatenate(values)
+                        if kind is rr.AnyValues:     # an arrow array: no per-item pass
+                            data = pa.array(data)
                     columns.extend(kind.columns(**{key: data}).partition(
                         [len(v) for v in values]))
                 rec.send_columns(path, indexes=indexes, columns=columns)
@@ -664,6 +673,185 @@ class RerunLog:
         rec.disable_timeline("iteration")
 
 
+class _Posed:
+    """The scene as the recorder reads it: the last scene sent (edits only), with this
+    step's poses."""
+
+    def __init__(self, scene, posed, positions, orientations):
+        self._scene = scene
+        self.posed, self.positions, self.orientations = posed, positions, orientations
+
+    def __getattr__(self, name):
+        return getattr(self._scene, name)
+
+    def __contains__(self, name):
+        return name in self._scene
+
+
+class RerunLog:
+    """Logs steps to one rerun sink (module docstring), from a child process.
+
+    The recorder (the rerun SDK's calls and their conversions, a few milliseconds a
+    step at 1,000 bodies) runs in a child process, ``python -m mkcollision_ros.rerun_log``,
+    on a core of its own when there is one: ``log_step`` pickles the step's poses and
+    result (and the scene after each edit) and queues them for a writer thread that
+    pipes them to the child, so a step waits only for the pickling.  At most
+    QUEUE_STEPS steps wait in the queue; beyond that a step waits for the child, so a
+    slow sink never grows memory without bound.  This process never imports rerun.
+    A failure in the child (a bad option, a sink that cannot open) is raised here: by
+    the constructor while opening, by the next ``log_step`` or ``close`` after.
+
+    Arguments as the recorder's: sink (a SINK_FORMS string or a Sink), pairs (chosen
+    pairs for the Minkowski view, "a:b" or (a, b)), and the keywords deep,
+    normal_length, point_size, table_rows, memory_limit, web_port, application_id,
+    recording_id, minkowski_method, minkowski_period, batch_steps, batch_seconds
+    (_Recorder)."""
+
+    def __init__(self, sink, pairs=(), **options):
+        self.sink = sink if isinstance(sink, Sink) else parse_sink(sink)
+        if self.sink.kind == "off":
+            raise ValueError("RerunLog needs a sink other than off")
+        self.pairs = parse_pairs(pairs)
+        root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        env = dict(os.environ)
+        env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"]
+                                    if env.get("PYTHONPATH") else "")
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "mkcollision_ros.rerun_log"], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, env=env, start_new_session=True)
+        self._errors = []
+        self._version = None
+        try:
+            pickle.dump(("open", self.sink, self.pairs, options), self.process.stdin)
+            self.process.stdin.flush()
+            reply = pickle.load(self.process.stdout)
+        except (OSError, EOFError, pickle.UnpicklingError) as err:
+            stop_group(self.process)
+            raise RuntimeError(f"the rerun logger process did not start: {err!r}") from err
+        if reply[0] != "open":
+            stop_group(self.process)
+            raise (ValueError if reply[1] == "ValueError" else RuntimeError)(reply[2])
+        self.where, self.viewer_pid = reply[1], reply[2]
+        self._queue = queue.Queue(maxsize=QUEUE_STEPS)
+        self._writer = threading.Thread(target=self._write, daemon=True)
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._writer.start()
+        self._reader.start()
+        self._closed = False
+
+    def blueprint(self):
+        """This log's layout (``blueprint(self.pairs)``)."""
+        return blueprint(self.pairs)
+
+    def _write(self):
+        out = self.process.stdin
+        while True:
+            item = self._queue.get()
+            if item is None:
+                break
+            try:
+                out.write(item)
+                out.flush()
+            except (OSError, ValueError):
+                self._errors.append("the rerun logger process ended")
+                break
+        try:
+            out.close()
+        except OSError:
+            pass
+
+    def _read(self):
+        while True:
+            try:
+                reply = pickle.load(self.process.stdout)
+            except (OSError, EOFError, pickle.UnpicklingError):
+                return
+            if reply[0] == "error":
+                self._errors.append(reply[1])
+
+    def _raise_pending(self):
+        if self._errors:
+            text = self._errors.pop(0)
+            raise RuntimeError(f"rerun logging failed: {text}")
+
+    def log_step(self, scene, res, step, latency=None):
+        """Hand one step to the recorder: ``scene`` (scene.Scene) after the step, its
+        StepResult ``res``, the step counter and the step's latency (s; None: the sum
+        of its phases).  Raises RuntimeError for a failure the child reported since
+        the last call."""
+        if self._closed:
+            raise RuntimeError("this RerunLog is closed")
+        self._raise_pending()
+        if self._version != (scene.version, scene.n_slots):
+            self._version = (scene.version, scene.n_slots)
+            self._queue.put(pickle.dumps(("scene", scene), protocol=5))
+        n = scene.n_slots
+        self._queue.put(pickle.dumps(
+            ("step", scene.posed[:n], scene.positions[:n], scene.orientations[:n], res,
+             int(step), latency), protocol=5))
+
+    def close(self):
+        """Send what is held, close the sink and the web viewer, and end the child
+        (waits for it to finish writing)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._queue.put(pickle.dumps(("close",), protocol=5))
+        self._queue.put(None)
+        self._writer.join()
+        try:
+            self.process.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            stop_group(self.process)
+        self._reader.join(timeout=5)
+        self._raise_pending()
+
+
+def _serve():
+    """The child's loop (``python -m mkcollision_ros.rerun_log``): messages from stdin,
+    replies (opened, errors) on the original stdout; anything else printed goes to
+    stderr."""
+    reply = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    source = sys.stdin.buffer
+
+    def send(*msg):
+        pickle.dump(msg, reply)
+        reply.flush()
+
+    _, sink, pairs, options = pickle.load(source)
+    try:
+        rec = _Recorder(sink, pairs, **options)
+    except Exception as err:  # noqa: BLE001 - reported to the parent, which raises
+        send("failed", type(err).__name__, str(err))
+        return
+    send("open", rec.where, rec._viewer.pid if rec._viewer is not None else None)
+    scene = None
+    try:
+        while True:
+            try:
+                msg = pickle.load(source)
+            except EOFError:          # the parent is gone: close what there is
+                break
+            if msg[0] == "close":
+                break
+            if msg[0] == "scene":
+                scene = msg[1]
+                continue
+            _, posed, positions, orientations, res, step, latency = msg
+            try:
+                rec.log_step(_Posed(scene, posed, positions, orientations), res, step,
+                             latency)
+            except Exception as err:  # noqa: BLE001 - reported, the next step goes on
+                send("error", f"{type(err).__name__}: {err}")
+    finally:
+        try:
+            rec.close()
+        except Exception as err:  # noqa: BLE001
+            send("error", f"closing: {type(err).__name__}: {err}")
+
+
 def stop_group(proc, signals=(signal.SIGTERM, signal.SIGKILL), timeout=5.0):
     """Stop a child started with its own session and everything in its process group
     (the ``rerun`` wrapper leaves the real viewer running otherwise): each signal in
@@ -778,3 +966,10 @@ def latest_at(rows, step, column):
         elif column in r:
             value = r[column]
     return value
+
+
+if __name__ == "__main__":
+    # the module under its own name, so that what the parent pickled (Sink, scene
+    # and result types) is of the classes the recorder checks against
+    from mkcollision_ros import rerun_log
+    rerun_log._serve()

@@ -85,6 +85,42 @@ def test_off_never_imports_rerun():
     assert out.stdout.strip() == "[]"
 
 
+def test_logging_runs_in_a_child_and_reports_its_failures(tmp_path):
+    """With a sink open the steps are recorded by the logger's child process: this
+    process still never imports rerun, and the file holds every step.  A sink the
+    child cannot open is a clear error here, and a child that dies makes the next step
+    raise instead of hanging."""
+    path = tmp_path / "child.rrd"
+    code = ("import sys, numpy as np\n"
+            "from mkcollision_ros.pipeline import Pipeline\n"
+            "p = Pipeline([{'name': 'a', 'shape': {'type': 'sphere', 'radius': 1.0}},"
+            " {'name': 'b', 'shape': {'type': 'sphere', 'radius': 1.0}}],"
+            f" rerun='save:{path}')\n"
+            "for k in range(25):\n"
+            "    p.step(np.array([[0.0, 0, 0], [1.5 + 0.01 * k, 0, 0]]),"
+            " np.tile([0.0, 0, 0, 1], (2, 1)), float(k))\n"
+            "p.close()\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('rerun', 'rerun_bindings')))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+    steps = {r["step"] for r in read_recording(path)["/world/contacts"] if "step" in r}
+    assert steps == set(range(1, 26))
+    with pytest.raises(RuntimeError):
+        RerunLog(f"save:{tmp_path / 'no' / 'such' / 'folder' / 'x.rrd'}")
+    p = Pipeline(BODIES, rerun=f"save:{tmp_path / 'killed.rrd'}")
+    p.rerun.process.kill()
+    p.rerun.process.wait()
+    rng = np.random.default_rng(3)
+    with pytest.raises(RuntimeError, match="rerun"):
+        for k in range(200):
+            p.step(*poses(k % 4, rng))
+            time.sleep(0.005)
+    p.close()
+
+
 @pytest.fixture(scope="module")
 def recording_path(tmp_path_factory):
     return tmp_path_factory.mktemp("rerun") / "steps.rrd"
@@ -280,12 +316,13 @@ def test_serve_binds_loopback_with_a_web_viewer():
         assert page is not None and b"<html" in page.lower()
         assert _listening(web_port) == ["127.0.0.1"]
         assert f"127.0.0.1:{web_port}" in log.where
-        viewer = log._viewer
+        viewer_pid = log.viewer_pid
+        assert viewer_pid is not None
     finally:
         log.close()
-    assert viewer.poll() is not None            # the web viewer stopped with the log
-    with pytest.raises(ProcessLookupError):
-        os.killpg(viewer.pid, 0)
+    assert log.process.poll() is not None       # the logger's process ended
+    with pytest.raises(ProcessLookupError):     # and the web viewer's group with it
+        os.killpg(viewer_pid, 0)
 
 
 def test_connect_streams_to_a_running_viewer(tmp_path):

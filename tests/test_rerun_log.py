@@ -70,33 +70,15 @@ def test_sink_forms_and_their_errors():
             parse_pairs([bad])
 
 
-def test_off_never_imports_rerun():
-    code = ("import sys, numpy as np\n"
-            "from mkcollision_ros.pipeline import Pipeline\n"
-            "p = Pipeline([{'name': 'a', 'shape': {'type': 'sphere', 'radius': 1.0}},"
-            " {'name': 'b', 'shape': {'type': 'sphere', 'radius': 1.0}}], rerun='off')\n"
-            "p.step(np.array([[0.0, 0, 0], [1.5, 0, 0]]), np.tile([0.0, 0, 0, 1], (2, 1)))\n"
-            "p.close()\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] in "
-            "('rerun', 'rerun_bindings')))\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=600)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "[]"
-
-
-def test_logging_runs_in_a_child_and_reports_its_failures(tmp_path):
-    """With a sink open the steps are recorded by the logger's child process: this
-    process still never imports rerun, and the file holds every step.  A sink the
-    child cannot open is a clear error here, and a child that dies makes the next step
-    raise instead of hanging."""
-    path = tmp_path / "child.rrd"
+def _rerun_modules_after_steps(rerun, steps):
+    """Run ``steps`` steps of two spheres in a fresh process with ``rerun=`` the given
+    sink; returns the rerun modules that process imported."""
     code = ("import sys, numpy as np\n"
             "from mkcollision_ros.pipeline import Pipeline\n"
             "p = Pipeline([{'name': 'a', 'shape': {'type': 'sphere', 'radius': 1.0}},"
             " {'name': 'b', 'shape': {'type': 'sphere', 'radius': 1.0}}],"
-            f" rerun='save:{path}')\n"
-            "for k in range(25):\n"
+            f" rerun={rerun!r})\n"
+            f"for k in range({steps}):\n"
             "    p.step(np.array([[0.0, 0, 0], [1.5 + 0.01 * k, 0, 0]]),"
             " np.tile([0.0, 0, 0, 1], (2, 1)), float(k))\n"
             "p.close()\n"
@@ -105,7 +87,20 @@ def test_logging_runs_in_a_child_and_reports_its_failures(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=600)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "[]"
+    return out.stdout.strip()
+
+
+def test_off_never_imports_rerun():
+    assert _rerun_modules_after_steps("off", 1) == "[]"
+
+
+def test_logging_runs_in_a_child_and_reports_its_failures(tmp_path):
+    """With a sink open the steps are recorded by the logger's child process: this
+    process still never imports rerun, and the file holds every step.  A sink the
+    child cannot open is a clear error here, and a child that dies makes the next step
+    raise instead of hanging."""
+    path = tmp_path / "child.rrd"
+    assert _rerun_modules_after_steps(f"save:{path}", 25) == "[]"
     steps = {r["step"] for r in read_recording(path)["/world/contacts"] if "step" in r}
     assert steps == set(range(1, 26))
     with pytest.raises(RuntimeError):

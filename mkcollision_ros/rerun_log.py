@@ -52,10 +52,12 @@ time: a timestamp when it is a date after 1973, else a duration)):
 A blueprint lays these out: the 3D view, the series, the table, the events and one
 view per chosen pair.
 
-Cost: what changes every step (poses, colours, contacts, the table, events, series) is
+Cost: the recorder runs in a child process of the logger (``RerunLog``), so the step
+only pickles its data and hands it over.  There, what changes every step (poses,
+colours, contacts, the table, events, series) is
 held for up to ``batch_steps`` steps or ``batch_seconds`` and sent as columns, one
-``send_columns`` call per entity and field set for the whole batch, since the SDK's
-Python conversion of each call (~70 us) outweighs the data; what is sent once (names,
+``send_columns`` call per entity and field set for the whole batch, since each call
+costs ~70 us of the SDK's Python conversion besides its data; what is sent once (names,
 sizes, triangles, styles, clears, the Minkowski view) is logged at once.  A viewer
 sees a step at most ``batch_seconds`` late; ``close`` sends what is held.
 """

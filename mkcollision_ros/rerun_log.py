@@ -701,7 +701,8 @@ class RerunLog:
     QUEUE_STEPS steps wait in the queue; beyond that a step waits for the child, so a
     slow sink never grows memory without bound.  This process never imports rerun.
     A failure in the child (a bad option, a sink that cannot open) is raised here: by
-    the constructor while opening, by the next ``log_step`` or ``close`` after.
+    the constructor while opening, by the next ``log_step`` after (every later one
+    when the child is gone); ``close`` returns what was not raised yet.
 
     Arguments as the recorder's: sink (a SINK_FORMS string or a Sink), pairs (chosen
     pairs for the Minkowski view, "a:b" or (a, b)), and the keywords deep,
@@ -722,6 +723,7 @@ class RerunLog:
             [sys.executable, "-m", "mkcollision_ros.rerun_log"], stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, env=env, start_new_session=True)
         self._errors = []
+        self._dead = None            # why the child can take no more steps
         self._version = None
         try:
             pickle.dump(("open", self.sink, self.pairs, options), self.process.stdin)
@@ -734,12 +736,12 @@ class RerunLog:
             stop_group(self.process)
             raise (ValueError if reply[1] == "ValueError" else RuntimeError)(reply[2])
         self.where, self.viewer_pid = reply[1], reply[2]
+        self._closed = False
         self._queue = queue.Queue(maxsize=QUEUE_STEPS)
         self._writer = threading.Thread(target=self._write, daemon=True)
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._writer.start()
         self._reader.start()
-        self._closed = False
 
     def blueprint(self):
         """This log's layout (``blueprint(self.pairs)``)."""
@@ -755,7 +757,7 @@ class RerunLog:
                 out.write(item)
                 out.flush()
             except (OSError, ValueError):
-                self._errors.append("the rerun logger process ended")
+                self._dead = "the rerun logger process ended"
                 break
         try:
             out.close()
@@ -767,11 +769,15 @@ class RerunLog:
             try:
                 reply = pickle.load(self.process.stdout)
             except (OSError, EOFError, pickle.UnpicklingError):
+                if not self._closed:
+                    self._dead = "the rerun logger process ended"
                 return
             if reply[0] == "error":
                 self._errors.append(reply[1])
 
     def _raise_pending(self):
+        if self._dead:
+            raise RuntimeError(f"rerun logging failed: {self._dead}")
         if self._errors:
             text = self._errors.pop(0)
             raise RuntimeError(f"rerun logging failed: {text}")
@@ -794,19 +800,22 @@ class RerunLog:
 
     def close(self):
         """Send what is held, close the sink and the web viewer, and end the child
-        (waits for it to finish writing)."""
+        (waits for it to finish writing).  Never raises for the child's failures:
+        returns the messages of those no ``log_step`` raised yet."""
         if self._closed:
-            return
+            return []
         self._closed = True
-        self._queue.put(pickle.dumps(("close",), protocol=5))
-        self._queue.put(None)
+        if self._writer.is_alive():
+            self._queue.put(pickle.dumps(("close",), protocol=5))
+            self._queue.put(None)
         self._writer.join()
         try:
             self.process.wait(timeout=60)
         except subprocess.TimeoutExpired:
             stop_group(self.process)
         self._reader.join(timeout=5)
-        self._raise_pending()
+        left, self._errors = self._errors, []
+        return left
 
 
 def _serve():

@@ -113,6 +113,9 @@ def test_logging_runs_in_a_child_and_reports_its_failures(tmp_path):
         for k in range(200):
             p.step(*poses(k % 4, rng))
             time.sleep(0.005)
+    for k in range(60):       # and every later step too, never waiting on a full queue
+        with pytest.raises(RuntimeError, match="ended"):
+            p.step(*poses(k % 4, rng))
     p.close()
 
 

@@ -114,23 +114,24 @@ def warm_up_all(report=print):
     pipeline's (``Pipeline.warm_up``: what the node compiles at start) and the pair
     API's (``mkcollision_ros.warm_up``: ``collide``, ``distance``, each method),
     reporting progress to ``report``.  Returns the seconds it took."""
-    from .narrowphase import warm_up
-    from .pipeline import Pipeline
     t0 = time.perf_counter()
     with reporting(report):
-        Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1.0}}]).warm_up()
-        warm_up()
+        _compile_everything()
     return time.perf_counter() - t0
+
+
+def _compile_everything():
+    from .narrowphase import warm_up
+    from .pipeline import Pipeline
+    Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1.0}}]).warm_up()
+    warm_up()
 
 
 def _measure():
     """Compile what the warm-ups reach and print the outermost kernels' seconds as
     EXPECTED_SECONDS (run it with an empty cache: NUMBA_CACHE_DIR=$(mktemp -d))."""
-    from .narrowphase import warm_up
-    from .pipeline import Pipeline
     with reporting(print, {}, heartbeat=0) as listener:
-        Pipeline([{"name": "a", "shape": {"type": "sphere", "radius": 1.0}}]).warm_up()
-        warm_up()
+        _compile_everything()
     print("EXPECTED_SECONDS = {")
     for name, s in listener.seconds.items():
         print(f"    {name!r}: {s:.0f},")

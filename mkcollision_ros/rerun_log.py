@@ -412,11 +412,11 @@ class _Recorder:
     # -- per-step data, held and sent as columns ---------------------------------
     def _hold(self, path, kind, **fields):
         """Hold this step's ``fields`` of ``path`` (an archetype's ``columns`` keywords,
-        each an array or list with one entry per instance, or a string; arrays are
-        copied, as the pipeline reuses its buffers)."""
+        each an array or list with one entry per instance, or a string).  Arrays are
+        held as they are: in the logger's child every step's scene and result arrive
+        as fresh arrays (unpickled), which nothing changes afterwards."""
         rows = self._held.setdefault((path, kind), [])
-        rows.append((self._now, {k: [v] if isinstance(v, str) else
-                                 v if isinstance(v, list) else np.array(v)
+        rows.append((self._now, {k: [v] if isinstance(v, str) else v
                                  for k, v in fields.items()}))
 
     def _send_held(self):
@@ -506,7 +506,7 @@ class _Recorder:
                     half = 0.5 * g.dims[name][keep][:, 1:2]
                     fields["translations"] = p - half * axis
                 else:
-                    fields["centers"] = p.copy()
+                    fields["centers"] = p
             kind = {"ellipsoids": rr.Ellipsoids3D, "boxes": rr.Boxes3D,
                     "capsules": rr.Capsules3D, "cylinders": rr.Cylinders3D}[name]
             if fresh:
@@ -535,7 +535,7 @@ class _Recorder:
             if fresh:
                 rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(positions=p))
             else:
-                self._hold("world/bodies/mesh_names", rr.Points3D, positions=p.copy())
+                self._hold("world/bodies/mesh_names", rr.Points3D, positions=p)
         if recolour:
             c = c.copy()
             c[g.mesh_plane[keep]] = _packed(PLANE)
@@ -748,17 +748,20 @@ class RerunLog:
         return blueprint(self.pairs)
 
     def _write(self):
+        # after a failed write it goes on taking items (and drops them), so a step or
+        # close waiting on a full queue is never left waiting
         out = self.process.stdin
         while True:
             item = self._queue.get()
             if item is None:
                 break
+            if self._dead:
+                continue
             try:
                 out.write(item)
                 out.flush()
             except (OSError, ValueError):
                 self._dead = "the rerun logger process ended"
-                break
         try:
             out.close()
         except OSError:
@@ -805,9 +808,8 @@ class RerunLog:
         if self._closed:
             return []
         self._closed = True
-        if self._writer.is_alive():
-            self._queue.put(pickle.dumps(("close",), protocol=5))
-            self._queue.put(None)
+        self._queue.put(pickle.dumps(("close",), protocol=5))
+        self._queue.put(None)
         self._writer.join()
         try:
             self.process.wait(timeout=60)

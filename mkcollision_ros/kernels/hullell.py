@@ -93,6 +93,9 @@ HE_BALL_TOL = 1e-9     # a point of B that far (relative) inside the unit ball p
 HE_ROOT_RTOL = 1e-13   # a root's last Newton step, relative (the depth needs ~1e-10)
 HE_DMIN_RTOL = 1e-12   # the search for phi's minimum between two poles gives up here
 HE_SUPPORT_TOL = 1e-12  # a foot counts if B's support along -n is within this * scale
+HE_FOOT_SLACK = 1e-9   # _plane_feet takes the right root for a point this far (relative)
+                       # outside the ellipse too: at touching the point lies on it, and
+                       # rounding may put it just outside
 HE_FAN_SLACK = 4e-10   # the edges' chord bound takes an edge's point on its faces' planes,
                        # within hull._FAN_TOL (1e-10) of the points' extent (<= 2 sqrt(3)
                        # radius_B), so it is lowered by this * scale
@@ -284,7 +287,7 @@ def _plane_feet(g11, g12, g22, wp, wq, U, scale, roots):
     if not (w0 > small and w1 > small):
         return -1, ux, uy, P0, P1, lam0, lam1
     k = 0
-    if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0:
+    if P0 * P0 / lam0 + P1 * P1 / lam1 < 1.0 + HE_FOOT_SLACK:
         roots[0], ok = _root_right(lam0, lam1, lam1, w0, w1, 0.0)
         if not ok:
             return -1, ux, uy, P0, P1, lam0, lam1
@@ -300,11 +303,13 @@ def _plane_feet(g11, g12, g22, wp, wq, U, scale, roots):
 @njit_inline
 def plane_foot(tt, P0, P1, lam0, lam1, ux, uy):
     """A foot of _plane_feet (root tt; P, lam, u as it returns them): (h(n) - n . P, n's
-    coordinates in the plane's basis)."""
+    coordinates in the plane's basis).  The value is clamped at 0: a point just outside
+    the ellipse (HE_FOOT_SLACK) gives a root tt > 0, while for an overlapping pair the
+    value is >= 0 in the cell."""
     N0, N1 = P0 / (lam0 + tt), P1 / (lam1 + tt)
     nn = math.sqrt(N0 * N0 + N1 * N1)
     c0, c1 = N0 / nn, N1 / nn
-    return -tt * nn, ux * c0 - uy * c1, uy * c0 + ux * c1
+    return max(-tt * nn, 0.0), ux * c0 - uy * c1, uy * c0 + ux * c1
 
 
 @njit_inline

@@ -138,7 +138,6 @@ if not numba.config.DISABLE_JIT:
     event.register("numba:compile", _FewerGcPassesWhileCompiling())
 
 
-
 def _one_memo_inliner():
     """Install the one-memo copy in numba's inliner (module docstring); returns
     whether it is installed."""

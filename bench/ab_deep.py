@@ -28,9 +28,6 @@ distance, at least it); pairs apart are left out (in contacts mode their distanc
 the first separating plane's bound, which a kernel may tighten); and the largest normal
 difference on pairs farther from touching than 1e-3 * scale in both (penetrating in
 both unless --cutoff is inf: apart, a contacts-mode normal is any separating direction).
-
-Measured with it (session 16, against b4cf41d; `--n 2000`, deep pairs, seven rounds):
-see BENCHMARKS.md.
 """
 import argparse
 import importlib

@@ -28,8 +28,8 @@ For every shape-type pair (canonical order, plane last) the same seeded cases
 Agreement = fraction of cases where the peer's "in contact" equals ours (auto).
 
 Each peer's repeats run back to back, so on a machine that slows in spells a row's
-ratio can swing by 2x from run to run (BENCHMARKS.md, sessions 34 and 35); for the speed
-goal's ratio use bench/vs_mujoco.py, which alternates the two peers round by round.
+ratio can swing by 2x from run to run; for the speed goal's ratio use bench/vs_mujoco.py,
+which alternates the two peers round by round.
 
     PYTHONPATH=. .venv/bin/python bench/narrowphase.py [--n 2000] [--quick]
 """

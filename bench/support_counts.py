@@ -1,13 +1,13 @@
 """Support points per deep pair, counted in pure Python: where GJK + EPA spend their steps.
 
-Times on this machine wander in spells (BENCHMARKS.md, session 35); the number of support
-points a pair takes does not, and an idea that saves none saves no time.  This counts the
-calls of ``gjk_epa.minkowski_core_xyz`` (every GJK, EPA and polish step makes one) for each
-deep pair (depth > 1e-3 * scale in bench/deep_pairs.py's reference run) through
-``gjk_epa_ws`` in contacts mode, split by whether EPA ran (the cores overlap) or not (GJK
-alone on cores apart, or a closed-form shortcut such as cylcyl's, which calls no
-support of A - B and counts 0), and for a pair with a box by the box's feature along the answer's
-normal (face, edge or vertex: how many of its axes are normal to it).  It also prints the
+Times on this machine wander in spells; the number of support points a pair takes does
+not, and an idea that saves none saves no time.  This counts the calls of
+``gjk_epa.minkowski_core_xyz`` (every GJK, EPA and polish step makes one) for each deep
+pair (depth > 1e-3 * scale in bench/deep_pairs.py's reference run) through ``gjk_epa_ws``
+in contacts mode, split by whether EPA ran (the cores overlap) or not (GJK alone on cores
+apart, or a closed-form shortcut such as cylcyl's, which calls no support of A - B and
+counts 0), and for a pair with a box by the box's feature along the answer's normal
+(face, edge or vertex: how many of its axes are normal to it).  It also prints the
 answer's largest departure from the reference depth.  Run it with numba off:
 
     NUMBA_DISABLE_JIT=1 PYTHONPATH=. .venv/bin/python bench/support_counts.py ROW [--n N]

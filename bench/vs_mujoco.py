@@ -2,17 +2,17 @@
 speed goal's ratio (issue 3) measured so that a slow spell of the machine hits both.
 
 bench/narrowphase.py times each peer's repeats back to back, so a noisy minute lands on
-one side of a row's ratio; on this 2-core VM its rows then swung by 2x between runs
-(BENCHMARKS.md, session 34).  Here every round times our batch kernel and then
-MuJoCo's pass on the same cases (a whole batch per call, the fastest of ``--inner``
-calls), and the row's figure is the ratio of the two fastest rounds, with the median
-and spread of the per-round ratios beside it.
+one side of a row's ratio; on this 2-core VM its rows can swing by 2x between runs.
+Here every round times our batch kernel and then MuJoCo's pass on the same cases (a
+whole batch per call, the fastest of ``--inner`` calls), and the row's figure is the
+ratio of the two fastest rounds, with the median and spread of the per-round ratios
+beside it.
 
-Why the fastest: the machine's slow spells are not steal time (thread CPU time moved
-with wall time, 1.24 -> 2.1 us per cylinder pair within one minute) but contention
-that slows our kernels more than MuJoCo's (the per-round ratio rose with our time), so
-the per-round median still wandered (0.54-0.61 on cylinder-cylinder in three runs)
-while the ratio of the fastest rounds held within 0.52-0.54.  The fastest round of
+Why the fastest: the machine's slow spells are not steal time (thread CPU time moves
+with wall time, from 1.24 to 2.1 us per cylinder pair within one minute) but contention
+that slows our kernels more than MuJoCo's (the per-round ratio rises with our time), so
+the per-round median wanders from run to run (0.54-0.61 on cylinder-cylinder over three
+runs) while the ratio of the fastest rounds holds within 0.52-0.54.  The fastest round of
 each peer is its least disturbed one; both get the same treatment.
 
     PYTHONPATH=. .venv/bin/python bench/vs_mujoco.py [ROW ...] [--n 2000] [--rounds 61]

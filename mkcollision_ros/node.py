@@ -50,10 +50,9 @@ line and the process exits with status 1 before spinning.
 import os
 
 # numba's OpenMP threads spin-wait after each parallel region; in a node that sleeps
-# between messages that spinning took most of a core and slowed the other processes
-# (bench/node_latency.py at 1,000 bodies and 100 Hz: node CPU 0.88 of a core, p50 5.7
-# ms; passive: 0.23, 3.8 ms).  Set before numba starts its threads; a user's own
-# setting wins.
+# between messages that spinning takes most of a core and slows the other processes
+# (bench/node_latency.py measures the node's CPU and latency).  Set before numba starts
+# its threads; a user's own setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import collections  # noqa: E402

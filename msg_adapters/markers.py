@@ -33,8 +33,8 @@ PLANE_THICKNESS = 0.002
 
 
 # 12 directions and 20 triangles a mesh: 60 points, so a MarkerArray of 1,000 bodies
-# stays near a megabyte (the next level, 240 points a mesh, was 2.7 MB and 130 ms to
-# serialise in rclpy)
+# stays near a megabyte (the next subdivision, 240 points a mesh, makes it 2.7 MB and
+# 130 ms to serialise in rclpy)
 DIRS, TRIS = icosphere(0)
 
 

@@ -126,7 +126,7 @@ def test_saved_case(case):
 
 def test_tiny_capsule_deep_inside_large_capsule_gjk_epa():
     """The issue's report: a capsule 10^3 - 10^4.5 times smaller at (or near) the centre
-    of a larger one.  GJK/EPA hit its caps there and answered FAILED; now never, and
+    of a larger one.  GJK/EPA hits its caps there; the answer must never be FAILED, and
     its depth is the closed form's."""
     rng = np.random.default_rng(11)
     for k in range(300):

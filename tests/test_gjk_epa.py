@@ -166,8 +166,8 @@ def _meridian_min(fun):
 def test_coaxial_valleys_are_penetrating(method):
     """Two bodies of revolution on one axis (coincident centres or shifted along the
     axis) in a random common pose: a ring of equally deep directions, which EPA's
-    polytope cannot enclose to its tolerance (its caps are hit).  Found here: two
-    coincident cylinders were FAILED, so the pipeline dropped their contact.  The pair
+    polytope cannot enclose to its tolerance (its caps are hit).  A FAILED answer there
+    (two coincident cylinders, say) would make the pipeline drop their contact.  The pair
     must come out PENETRATING with the exact depth, from a 1-D search over the
     meridian angle (exact for such pairs), and a normal along which A - B is that
     deep."""
@@ -508,10 +508,10 @@ def test_box_box_sat_matches_gjk_epa():
 
 
 # A near-touching ellipsoid-convex pair from the 10,000-pair run (seeded set of
-# test_against_coal_near_touching, case 1271): GJK's normal was the direction of the tiny
-# closest-point difference, off enough that the distance it reported (8.56e-5) was not
-# the separation along it (8.36e-5), 1.3e-6 of the size apart.  The normal now comes from
-# the final simplex's plane; 102 of the 2,000 cases in that set had this defect.
+# test_against_coal_near_touching, case 1271): the direction of the tiny closest-point
+# difference, taken as GJK's normal, is off enough that the distance reported (8.56e-5)
+# is not the separation along it (8.36e-5), 1.3e-6 of the size apart (102 of the 2,000
+# cases in that set are so).  The normal comes from the final simplex's plane.
 NEAR_TOUCHING_1271 = {"sa": {"type": "ellipsoid", "radii": [0.6492990655265459, 0.5598225563210336, 0.336497499472398]}, "pa": [-1.3961126530908212, 0.30504113127443594, 1.0179549160019699], "qa": [0.9686309404918957, -0.10828596060761372, -0.012094758920499792, -0.22334271571673664], "sb": {"type": "convex", "points": [[0.5124320065544132, 0.4973356154021319, 0.2799130665161494], [0.35477153811359646, 0.6984689962038344, -0.08579057070789468], [-0.1946098853123371, 0.5748125647782905, 0.38004456436885337], [0.47160661906715723, -0.004104415522771491, -0.4935838458853245], [0.3887405738731895, 0.0199253378383855, 0.5289555362729753], [-0.0931878755095858, 0.77150999545536, -0.06578237751362324], [0.39400126494221394, -0.526866421871786, -0.3397702413182035], [0.7827227536591813, -0.24464488521629643, 0.09697915170861075]]}, "pb": [-1.2756496686962688, 0.6959750340610821, 1.342669136096483], "qb": [-0.7201703104102456, 0.3495699894123977, -0.32098080835716875, -0.506089781730678]}
 
 
@@ -532,12 +532,11 @@ def test_near_touching_normal_certifies_the_distance_case_1271():
 
 
 # An apart ellipsoid-box pair from the 10,000-pair run (test_against_coal_random
-# [ellipsoid-box], case 4093), found when EPA started walking face adjacency: GJK built a
-# flat tetrahedron (three nearly equal support points) whose rounding-noise face
-# orientations passed the "origin inside" test with the origin 0.13 m off its plane, and
-# handed it to EPA.  The old EPA happened to recover; now a flat tetrahedron (6 |volume|
-# <= GJK_FLAT_TOL * longest edge^3) never counts as holding the origin, and EPA refuses a
-# start whose faces are not consistently oriented instead of expanding it.
+# [ellipsoid-box], case 4093): GJK builds a flat tetrahedron (three nearly equal support
+# points) whose rounding-noise face orientations pass the "origin inside" test with the
+# origin 0.13 m off its plane.  A flat tetrahedron (6 |volume| <= GJK_FLAT_TOL * longest
+# edge^3) never counts as holding the origin, and EPA refuses a start whose faces are not
+# consistently oriented instead of expanding it.
 FLAT_TETRA_4093 = {"sa": {"type": "ellipsoid", "radii": [0.6519562655995701, 0.5067746184640042, 0.976064801242093]}, "pa": [-0.8733636366997193, 0.8262603567589, -0.24141831864079252], "qa": [0.12045826424626764, 0.5117919536733838, 0.18934968639657723, -0.8292801088844922], "sb": {"type": "box", "size": [1.0424166763047211, 0.7979707585757998, 0.5837698505907359]}, "pb": [0.3373464625092759, 0.7812998460846542, 0.34190541402468067], "qb": [0.17340756053708387, -0.7142966709943437, -0.47665169692163883, 0.48219627080339206]}
 
 
@@ -597,16 +596,16 @@ def test_face_normal_minimum_is_exact(kind, cores):
     # height less the ellipsoid's lowest point, in closed form.
     # EPA alone stops within its tolerance (depths within 1e-8 * scale); the face test
     # (gjk_epa._face_polish) lands on the normal itself, with the witness on the face
-    # exactly on its plane: all pairs within EPA's bounds, and nearly all exact (49 and
-    # 50 of 50 when written; the others were closed by EPA before the face test's cap
-    # check passed).  A hull's faces are tested by GJK only (gjk_epa._hull_polish, on
-    # cores apart), so the hull is pressed in shallower than the rolling radius only.
+    # exactly on its plane: all pairs within EPA's bounds, and nearly all exact (49 or
+    # 50 of 50; the others EPA closes before the face test's cap check passes).  A
+    # hull's faces are tested by GJK only (gjk_epa._hull_polish, on cores apart), so
+    # the hull is pressed in shallower than the rolling radius only.
     # Shallower than the ellipsoid's rolling radius its core stays apart from the face's
     # shape and GJK solves the pair: its own face test (in _gjk) takes the normal within
     # a few supports and needs no basin check (h is convex there), so every pair is
     # exact and the median pair takes few iterations (6 on the box, 5 on the cylinder,
-    # 8 on the hull, measured 2026-11-26; GJK converging on the curved core by itself:
-    # medians 10, 11 and 10).
+    # 8 on the hull; GJK converging on the curved core by itself takes medians of 10, 11
+    # and 10).
     rng = np.random.default_rng(16)
     iters = []
     face = ({"type": "box", "size": [2.0, 1.6, 1.0]} if kind == "box"
@@ -696,9 +695,9 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     # below POLISH_STEP_DONE, and the witnesses share the residual).  The ellipsoid
     # is pressed in less than its rolling radius, so the cores stay apart and GJK
     # solves the pair (deeper, EPA: test_deep_hull_ridge_and_apex_against_exact_depths);
-    # GJK alone ends within its tolerance, its normal off the crease (before the
-    # search no pair's depth was h(n) to 1e-12 * scale with the normal on the crease;
-    # with it 50 of 50, when written).
+    # GJK alone ends within its tolerance, its normal off the crease (without the
+    # search no pair's depth is h(n) to 1e-12 * scale with the normal on the crease;
+    # with it 50 of 50).
     # A pair whose minimum lies on a side face's normal instead counts as well (the
     # face test, _hull_face_test, finds it exactly).  Depths are checked against the
     # slow oracle's direction search (oracles.signed_distance_oracle), whose pattern
@@ -763,8 +762,8 @@ def test_deep_hull_ridge_and_apex_against_exact_depths(hull_is_a):
     #   function), the ridge's two ends tied as the support.
     # Where the feature is the support there (70 of the 120 pairs), the
     # depth must equal the bound, elsewhere be at least it.  EPA searches neither
-    # feature (gjk_epa._hull_side; tried in session 25: fewer steps, more time,
-    # BENCHMARKS.md), so its own tolerance holds: EPA_REL_TOL = 1e-8 * scale.
+    # feature (gjk_epa._hull_side: searching them takes fewer steps but more time), so
+    # its own tolerance holds: EPA_REL_TOL = 1e-8 * scale.
     rng = np.random.default_rng(25)
     pyramid = {"type": "convex", "points": [[0.0, 0.0, 0.5]] + [
         [x, y, -0.5] for x in (-1.0, 1.0) for y in (-1.0, 1.0)]}
@@ -803,9 +802,9 @@ def test_sphere_deep_in_ellipsoid_with_margin_against_the_exact_depth():
     # margin and the sphere's radius (the shapes are E and c grown by those radii).
     # EPA takes a Newton minimum there under the 0.5 rad basin cap of pairs with
     # point-like or ellipsoid cores (_polish_is_global), a rule measured on random
-    # pairs, not proved: in session 25 a hull's vertex in an ellipsoid had a local
-    # minimum 0.29 rad from a deeper one (BENCHMARKS.md).  Here 2,000 random deep
-    # pairs (100,000 when written: within 3.6e-9 * scale) must be within EPA's
+    # pairs, not proved (a hull's vertex in an ellipsoid can have a local minimum 0.29
+    # rad from a deeper one).  Here 2,000 random deep pairs (on 100,000, all within
+    # 3.6e-9 * scale) must be within EPA's
     # tolerance, EPA_REL_TOL = 1e-8 * scale, of the exact depth (the closed form's
     # point-ellipsoid distance, analytic._point_ellipsoid, itself checked against a
     # bisection here).
@@ -853,7 +852,7 @@ def test_cylinder_side_minimum_on_the_crease_from_gjks_early_gap(cylinder_is_a):
     # horizontal to round-off and the depth is h(n) to 1e-12 * scale; the cylinder's
     # witness lies on the side.  Once |v| proves that the shapes touch, GJK runs the
     # search from the face test's gap (0.1 |v|^2) rather than from GJK_POLISH_TOL
-    # |v|^2: median 10 iterations with it, 15 without (measured 2026-11-26).  Depths
+    # |v|^2: median 10 iterations with it, 15 without.  Depths
     # are checked against the slow oracle's direction search as in the hull test above.
     rng = np.random.default_rng(20)
     cyl = {"type": "cylinder", "radius": 0.9, "height": 2.0}
@@ -889,10 +888,9 @@ def test_newton_minimum_is_stationary():
     # h'' times the step, h'' ~ scale).  The gradient of h there is the tangential part
     # of the support point s of A - B along the normal, computed here by the numpy
     # oracle; at the exact minimum it is zero.  Deep ellipsoid pairs, with their cores
-    # overlapping (EPA's Newton step) or apart (GJK's).  Measured 2026-11-26: median
-    # |grad| 6.4e-8 * scale, p90 5.6e-7, the largest 1.4e-6 (h then within ~1e-12 *
-    # scale of its minimum).  Until session 20 the stop was 1e-7 rad after the step
-    # (p90 4.7e-10, the largest 6.1e-7, and one more support per polish).
+    # overlapping (EPA's Newton step) or apart (GJK's).  Measured: median |grad|
+    # 6.4e-8 * scale, p90 5.6e-7, the largest 1.4e-6 (h then within ~1e-12 * scale of
+    # its minimum).
     rng = np.random.default_rng(18)
     grads = []
     for _ in range(200):
@@ -937,7 +935,7 @@ def test_box_cylinder_closed_form_depth_is_exact_and_global(cylinder_is_a):
     # its normal, the true depth to round-off where certified), normals within 1e-3
     # rad on pairs deeper than 1e-3 * scale.  Certified pairs have depth == h(normal)
     # to 1e-12 * scale and their witnesses on the two surfaces (support points along
-    # +-n); at least 80% of the penetrating pairs must be (measured 2026-11-26: 90%).
+    # +-n); at least 80% of the penetrating pairs must be (measured: 90%).
     rng = np.random.default_rng(23)
     n = 2000
     sb, pb, qb, sc, pc, qc = O.random_pairs(rng, "box", "cylinder", n, offset=(0.0, 0.8))
@@ -1521,8 +1519,8 @@ def test_cylinder_pair_ball_certified_depth_is_global():
     # against cylcyl._crossing_global's bound.  Checked on random pairs as
     # _check_certified_shortcut says.  At least 20% of the penetrating pairs are
     # certified (measured here 316 of 750, 42%: these overlaps are deep, up to the
-    # centres' coinciding; 160 before _crossing_global), at least 100 of them by the
-    # crossing (measured here: 200; 44 with the witnesses' balls alone), whose normal is
+    # centres' coinciding), at least 100 of them by the crossing (measured here: 200;
+    # 44 with the witnesses' balls alone), whose normal is
     # square to both axes.
     certified, pen, found = _check_certified_shortcut(31, ("cylinder", "cylinder"), 60,
                                                       0.0)

@@ -110,7 +110,7 @@ def test_hand_placed_edge_into_the_rim_and_apart_pairs():
 def test_gjk_decides_pairs_no_vertex_centre_or_plane_proves(swap):
     # the thin long box over the top rim, tilted, its centre outside the cylinder: no
     # box vertex inside, neither centre inside the other, no face, side or cap plane
-    # apart (hand-placed: the kernel before _cyl_gjk left both UNPROVED).  _cyl_gjk
+    # apart (hand-placed: without _cyl_gjk both would be UNPROVED).  _cyl_gjk
     # proves the first overlapping (then the exact depth, against GJK/EPA without the
     # fan) and the second apart, the gap a lower bound with the witnesses across it
     box = np.array([[x, y, z] for x in (-0.05, 0.05) for y in (-2, 2) for z in (-0.05, 0.05)])

@@ -161,8 +161,8 @@ def test_batch_kernel_takes_the_fan_and_agrees_with_gjk_epa():
     assert deep.sum() > 100
     assert np.array_equal(sts[0][deep], sts[1][deep])
     assert np.all(np.abs(outs[0][deep, 0] - outs[1][deep, 0]) <= 2e-8 * scale[deep])
-    # the fan answered before GJK (one step) or after it in place of EPA, where GJK/EPA
-    # took many steps
+    # the fan answers before GJK (one step) or after it in place of EPA, where GJK/EPA
+    # take many steps
     steps = outs[0][deep, C.OUT_ITERS], outs[1][deep, C.OUT_ITERS]
     assert np.mean(steps[0] == 1) > 0.7 and np.all(steps[1] > 1)
     assert steps[0].mean() < 0.5 * steps[1].mean()

@@ -144,8 +144,8 @@ def test_plane_pairs():
 
 def test_plane_margin_grows_the_half_space():
     """A plane's margin m grows its half-space n.x <= d to n.x <= d + m, in the world
-    frame path of collide and in the body-frame closed form alike (until session 12
-    the narrow phase dropped it while the broad phase grew the plane by it)."""
+    frame path of collide and in the body-frame closed form alike, as the broad phase
+    grows the plane by it."""
     from mkcollision_ros.kernels.analytic import collide_analytic
     from mkcollision_ros.shapes import shape_row
     sphere = {"type": "sphere", "radius": 0.5}

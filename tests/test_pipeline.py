@@ -189,12 +189,12 @@ def test_sphere_rolling_keeps_one_contact_with_one_id():
     assert x > 1.0                                               # it really travelled
 
 
-# Bug (demo id churn): in the demo scene (bodies sliding ~3 cm and spinning ~0.05 rad per
-# step) 150 steps gave ~1,200 contact ids for ~1,450 contacts.  The stored contacts were
-# dropped by the drift rule BEFORE being matched to the new manifold, so a body sliding
-# more than drift_threshold per step lost every id, although the new points sat exactly
-# on the stored points of the sliding body.  Stored contacts are now matched first
-# (Bullet's getCacheEntry before refreshContactPoints); only unmatched ones may drift out.
+# Bug (demo id churn): in the demo scene bodies slide ~3 cm and spin ~0.05 rad per step.
+# Stored contacts dropped by the drift rule before being matched to the new manifold
+# would make a body sliding more than drift_threshold per step lose every id, although
+# the new points sit exactly on the stored points of the sliding body.  Stored contacts
+# are matched first (Bullet's getCacheEntry before refreshContactPoints); only unmatched
+# ones may drift out.
 def test_sliding_spinning_box_keeps_its_four_ids():
     p = box_on_plane()
     first = None
@@ -250,7 +250,7 @@ def test_stacked_boxes_and_lying_shapes():
 def test_coincident_coaxial_bodies_give_contacts():
     """Bodies of revolution spawned at one pose (a ring of equally deep directions;
     GJK/EPA hits its caps there): each pair still yields its contact, with the exact
-    depth.  Found here: such pairs were FAILED and the pipeline dropped them."""
+    depth (a FAILED answer there would make the pipeline drop them)."""
     bodies = [{"name": "can", "shape": {"type": "cylinder", "radius": 0.2, "height": 0.3}},
               {"name": "peg", "shape": {"type": "cylinder", "radius": 0.1, "height": 0.6}},
               {"name": "ball", "shape": {"type": "sphere", "radius": 0.05}}]

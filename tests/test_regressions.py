@@ -48,34 +48,32 @@ scale) and, when it reports separated, its distance a lower bound (0 <= d_mpr <=
 
 Bugs found in this library itself get a scene too, named ``mkc_*``, with "found here"
 and the date as source (the issue: every bug found gets its saved scene and a test
-naming it): mkc_epa_polish_wrong_basin_ellipsoid_cone (Newton's method in EPA kept a
-shallower local minimum; also missed by the first version of the oracle's search),
+naming it): mkc_epa_polish_wrong_basin_ellipsoid_cone (Newton's method in EPA keeping a
+shallower local minimum, which an oracle search stopping at a local minimum misses too),
 mkc_kink_newton_wrong_basin_cylinder_cylinder and
-mkc_kink_newton_close_basin_capsule_cylinder (a version along the creases of cylinders
-and capsules, not adopted, kept local minima 0.33 and 0.047 rad from the deepest
-direction), mkc_crease_polish_other_crease_cylinder_cylinder (the crease search EPA
-adopted in session 11, before it searched both cylinders' creases, kept B's crease
-minimum 0.19 rad from the deepest direction on A's),
-mkc_crease_polish_wrong_basin_ellipsoid_capsule (the same search on a capsule's crease,
-session 12, under the 0.5 rad basin cap, kept a minimum 0.19 rad from a deeper one off
-the crease), mkc_crease_polish_wrong_basin_ellipsoid_box (the same on a box's edges,
-session 15: a minimum 0.20 rad from a deeper one in a vertex's region),
+mkc_kink_newton_close_basin_capsule_cylinder (Newton's method along the creases of
+cylinders and capsules would keep local minima 0.33 and 0.047 rad from the deepest
+direction), mkc_crease_polish_other_crease_cylinder_cylinder (a crease search over one
+cylinder's crease only keeps B's crease minimum 0.19 rad from the deepest direction on
+A's), mkc_crease_polish_wrong_basin_ellipsoid_capsule (the same search on a capsule's
+crease under a 0.5 rad basin cap keeps a minimum 0.19 rad from a deeper one off the
+crease), mkc_crease_polish_wrong_basin_ellipsoid_box (the same on a box's edges: a
+minimum 0.20 rad from a deeper one in a vertex's region),
 mkc_crease_polish_early_wrong_basin_cylinder_cylinder (the search along a cylinder's
-crease tried at a gain of 1e-2 * scale, session 16, not adopted: a minimum 0.34 rad from
-the deepest direction; tried again in session 18, and the same between an ellipsoid
-and a cylinder: mkc_crease_polish_early_wrong_basin_ellipsoid_cylinder, 0.25 rad),
-mkc_face_polish_wrong_basin_ellipsoid_cylinder (the test of a face normal, session 16,
-under a 0.5 rad cap: a minimum on a cylinder's axis 0.31 rad from a deeper one),
-mkc_hull_face_polish_wrong_basin_ellipsoid_convex (the same test on a convex hull's
-face in EPA, session 19, not adopted: under a 0.1 rad cap a minimum 0.077 rad from a
-deeper one; tried again in session 22 with the cap the test proves, _face_basin: safe
-but slower),
-mkc_coincident_coaxial_cylinders
-(two cylinders at one pose: a ring of equally deep directions, EPA's caps hit,
-reported FAILED and dropped by the pipeline), mkc_coincident_coaxial_capsules (the
-world-frame capsule pair of session 14 took the round-off cross product of two
-parallel axes as the normal) and mkc_point_capsule_on_a_segment (a zero-length capsule
-on another's segment got a normal along that segment's axis, in part).
+crease started at a gain of 1e-2 * scale would keep a minimum 0.34 rad from the deepest
+direction; the same between an ellipsoid and a cylinder:
+mkc_crease_polish_early_wrong_basin_ellipsoid_cylinder, 0.25 rad),
+mkc_face_polish_wrong_basin_ellipsoid_cylinder (the test of a face normal under a 0.5
+rad cap: a minimum on a cylinder's axis 0.31 rad from a deeper one),
+mkc_hull_face_polish_wrong_basin_ellipsoid_convex (the same test on a convex hull's face
+in EPA under a 0.1 rad cap would keep a minimum 0.077 rad from a deeper one; under the
+cap the test proves, _face_basin, it is safe but slower, and EPA does not run it),
+mkc_coincident_coaxial_cylinders (two cylinders at one pose: a ring of equally deep
+directions, EPA's caps hit; a FAILED answer would be dropped by the pipeline),
+mkc_coincident_coaxial_capsules (a world-frame capsule pair whose parallel axes'
+round-off cross product must not become the normal) and mkc_point_capsule_on_a_segment
+(a zero-length capsule on another's segment, whose normal must not lie along that
+segment's axis, even in part).
 
 A failing scene names a bug in the library: the test is kept as is and the failure is
 reported; tolerances are not loosened to make a scene pass.

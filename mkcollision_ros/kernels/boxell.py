@@ -54,9 +54,9 @@ Measured (pure Python on bench/deep_pairs.py's 2,000 ellipsoid-box cases, agains
 reference run of GJK and EPA): of the 960 deep pairs, 142 certified by the ball (of the
 390 whose cores overlap at a face minimum) and all 383 whose cores are apart given
 their exact distance (121 over a face, 198 an edge, 64 a vertex), within 8.3e-13 *
-scale of GJK's; 8.25 supports of A - B per deep pair left, from 13.95.  Of the 1,015
-apart pairs, every one decided (exact, with an infinite ``stop``).  Figures of time:
-BENCHMARKS.md, session 37.
+scale of GJK's; GJK and EPA are left 8.25 supports of A - B per deep pair.  Of the
+1,015 apart pairs, every one decided (exact, with an infinite ``stop``).  Figures of
+time: BENCHMARKS.md.
 """
 import math
 

@@ -28,27 +28,16 @@ GRID_ROW_SLOTS sorted keys in its own slots while counting; rows with more run a
 into their final offsets), so the output does not depend on the thread count or on
 the visiting order.
 
-Why a grid (it replaced sweep-and-prune, which was kept until the 10,000-body pipeline
-benchmark).  Measured, one thread, median of 9, on the shared 2-core machine while
-another engineer's jobs ran (so read ratios, not absolutes), identical pairs:
-
-    scene                                     pairs    SAP (warm)   grid
-    bench scene, 10,000 bodies, 0.2 per body   4,412   12-18 ms     6.7 ms
-    bench scene, 10,000 bodies, 2 per body    42,978   51-58 ms      17 ms
-    same as the first plus 1 % 8 m slabs      24,755   19-21 ms      26 ms
-    10,000 bodies on a line                   12,342  1.3-1.9 ms    1.7 ms
-    500 bodies stacked at one point          124,750   13-18 ms     3.2 ms
-    bench scene, 1,000 bodies, 0.2 per body      432  0.45-0.6 ms 0.5-0.6 ms
-
-SAP tests every body against all the bodies whose x-interval it overlaps, which in a
-uniform 3-D scene is ~N^(1/3) times the true neighbours; the grid only sees the cells
-around each body, so it grows linearly at fixed density.  It loses on one-dimensional
-layouts (where SAP is ideal) and on large slabs among small parts (randomly turned
-8 m slabs span ~1,000 cells each, so they are "big" and tested against every body).  The cost is
-dominated by memory latency (random bucket reads), hence the Morton hash and the
-space-filling visiting order.  Threads: on this machine a second thread made these
-kernels slower whenever the other core was busy, so the pipeline runs them on one
-thread below ``PARALLEL_MIN_CHEAP_ITEMS`` (the same compiled code, the same numbers).
+Why a grid rather than sweep-and-prune (SAP).  SAP tests every body against all the
+bodies whose x-interval it overlaps, which in a uniform 3-D scene is ~N^(1/3) times the
+true neighbours; the grid only sees the cells around each body, so it grows linearly at
+fixed density.  It loses on one-dimensional layouts (where SAP is ideal) and on large
+slabs among small parts (randomly turned 8 m slabs span ~1,000 cells each, so they are
+"big" and tested against every body).  The cost is dominated by memory latency (random
+bucket reads), hence the Morton hash and the space-filling visiting order.  Threads: a
+second thread makes these kernels slower whenever the other core is busy, so the
+pipeline runs them on one thread below ``PARALLEL_MIN_CHEAP_ITEMS`` (the same compiled
+code, the same numbers).
 """
 import math
 

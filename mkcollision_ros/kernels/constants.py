@@ -60,8 +60,8 @@ NP_CHUNK = 128             # fewest pairs per block of collide_batch (jit.n_bloc
 GJK_MAX_ITERS = 128        # iterations (support evaluations)
 GJK_REL_TOL = 1e-12        # relative duality gap on the squared distance (dimensionless)
 GJK_POLISH_TOL = 1e-3     # with an ellipsoid: try Newton's method once the gap < tol |v|^2
-                           # (1e-4 until session 16: deep ellipsoid pairs with their cores
-                           # apart 2-4% fewer GJK + EPA steps at 1e-3, fewer at 1e-2)
+                           # (against 1e-4, deep ellipsoid pairs with their cores apart
+                           # take 2-4% fewer GJK + EPA steps at 1e-3, fewer at 1e-2)
 GJK_FLAT_TOL = 1e-9        # tetrahedra with 6|volume| <= tol * (longest edge)^3 are flat
 
 # --- EPA ---------------------------------------------------------------------------------
@@ -73,12 +73,8 @@ EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the 
 POLISH_STEP_DONE = 1e-6    # Newton's method and the crease search end once the step they
                            # would take next is below this (rad), at the point they are
                            # at: the direction is then within ~1e-6 rad of the minimum and
-                           # h within ~1e-12 * scale of it.  Until session 18: 1e-9, until
-                           # session 20: 1e-7, and Newton's method took that last step (a
-                           # support for nothing the tolerances see; pure-Python counts,
-                           # deep pairs: ellipsoid-ellipsoid 16.6 -> 15.3 GJK + EPA
-                           # steps, ellipsoid-capsule 14.2 -> 13.3, ellipsoid-cylinder
-                           # 18.4 -> 17.7; figures in BENCHMARKS.md)
+                           # h within ~1e-12 * scale of it.  That last step is not taken:
+                           # it would cost a support for nothing the tolerances see
 EPA_POLISH_ITERS = 6       # its steps (support evaluations)
 EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
 EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther than this
@@ -94,13 +90,13 @@ EPA_FACE_CAP_MAX = 1.5     # largest EPA_POLISH_CAP for a minimum found so (rad)
 EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (gjk_epa._kink_polish)
                            # when the best face's normal n has |n . axis| below this (a
                            # box: for one of its axes only; near two, n is near a face
-                           # normal; 0.15 gave 2% more steps on deep ellipsoid-box pairs)
+                           # normal; 0.15 gives 2% more steps on deep ellipsoid-box pairs)
 EPA_KINK_ITERS = 8         # its support evaluations
 EPA_KINK_STEP = 0.1        # longest step it may take along the side's circle (rad)
 EPA_KINK_CAP_CAPSULE = 0.05  # EPA_POLISH_CAP for a minimum on a capsule's crease (rad):
-                           # deeper minima off it were found 0.09-0.19 rad away
+                           # deeper minima off it lie 0.09-0.19 rad away
 EPA_KINK_CAP_BOX = 0.1     # and on a box edge's crease against an ellipsoid: at 0.5 rad,
-                           # 1 of 100,000 random pairs kept a minimum 3e-4 * scale too
+                           # 1 of 100,000 random pairs keeps a minimum 3e-4 * scale too
                            # deep, the true one in a vertex's region 0.2 rad away (none
                            # at 0.1 or 0.05; 0.1 takes 18.1 steps, 0.05 18.8)
 EPA_VERTEX_CAP_MIN = 0.05  # least basin cap for a box vertex's minimum against an ellipsoid

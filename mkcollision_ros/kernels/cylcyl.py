@@ -46,19 +46,17 @@ them, and only the deepest rim point found is tried (one support of A - B): ever
 is at most the depth, so only the deepest can be certified.
 
 Measured (pure-Python runs of cylinders_depth on bench/deep_pairs.py's 2,000
-cylinder-cylinder cases; the reference is GJK + EPA at 82766e7): 289 of 961 penetrating
-pairs certified (270 of the 939 deeper than 1e-3 * scale: 234 a rim against a side, 36
+cylinder-cylinder cases, GJK + EPA the reference): the rims and caps certify 289 of 961
+penetrating pairs (270 of the 939 deeper than 1e-3 * scale: 234 a rim against a side, 36
 against a cap), depths within 6.0e-9 * scale of EPA's (EPA's tolerance: it reports its
 nearest face), normals within 1.3e-4 rad (EPA's error on a curved minimum).  0.87 rims
 solved per pair (3.6 Newton steps each), 0.38 supports of A - B.  Compiled, ~175 ns
 per pair over all 2,000 (a loop calling it alone, less the loop's own ~27 ns), against
-~3.4 us of GJK + EPA saved on each certified pair.  The crossing (session 29, the same
-run against GJK + EPA at 7cbaae1, which held that face as EPA's minimum from its
-first step) certifies 96 more of the 939: 385 in all, the crossing's depths within
-1e-16 * scale and normals within 4e-8 rad of EPA's.  _crossing_global (session 33)
-certifies most crossings near an end as well (889 of 965 crossings among 2,895 deep
-pairs of three seeds of the benchmark's cases, against 260 by the balls alone); see
-BENCHMARKS.md, session 33, for the time.  The other kinds have no ball
+~3.4 us of GJK + EPA saved on each certified pair.  The crossing certifies 96 more of
+the 939, its depths within 1e-16 * scale and normals within 4e-8 rad of EPA's.
+_crossing_global certifies most crossings near an end as well (889 of 965 crossings
+among 2,895 deep pairs of three seeds of the benchmark's cases, against 260 by the
+balls alone).  The other kinds have no ball
 about a witness inside the other cylinder as deep as the depth: crossings near a
 cylinder's end that _crossing_global's bound misses (gjk_epa._cylinders_crossing
 hands their face to EPA), two rims, and rims whose ball the other's cap or side cuts short.
@@ -66,7 +64,7 @@ For the last, and for a cap's candidate whose ball the side cuts short, _cover
 bounds the depth from below by the point's gap to the side (or cap) instead, where
 the point's cylinder reaches, along three segments from it, far enough round the
 other's cap (or side): every translate shorter than the gap still meets the other
-cylinder (session 38: 558 -> 615 of the 939 deep pairs above certified).
+cylinder (615 of the 939 deep pairs above are certified in all).
 
 Witness points (A's frame, cores): p and its translate by the depth along n on the
 other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
@@ -189,16 +187,18 @@ def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z, d3
     being <= 0 as p lies inside that radius; under the cap the point nearest the axis
     whose s x_z is at most H - sqrt(delta^2 - cur^2)), and moves cur to the highest
     level one of them reaches; the levels are covered when cur reaches delta.
-    Measured (bench/deep_pairs.py's 2,000 cylinder-cylinder cases, pure Python): 57
-    more of the 939 deep pairs certified, 558 -> 615 (49 under a side, 8 under a cap).
+    Measured (bench/deep_pairs.py's 2,000 cylinder-cylinder cases, pure Python): it
+    certifies 57 of the 939 deep pairs that no ball does (49 under a side, 8 under a
+    cap), 615 certified in all.
     With points sampled densely over the whole cylinder instead of the three segments,
     66 of the 91 deep rim-side minima with the ball cut short by a cap would be covered
-    (the segments: 52).  Against a hull (hull_cylinder_depth): 183 -> 240 of the 953
-    deep cylinder-convex pairs (each of the hull's vertices as a segment of its own
-    would reach 260).  Left uncertified: 111 deep rim-side minima whose rim point lies
-    past the other's axis (delta would be R + |p_xy|, beyond any point's R - |x_xy|;
-    covering those needs the direction of t_xy, not only its length), 109 cap minima
-    (80 of them deeper than H) and 42 rim-side ones, 32 crossings and 30 others."""
+    (the segments: 52).  Against a hull (hull_cylinder_depth): 240 of the 953 deep
+    cylinder-convex pairs certified in all, 57 of them by _cover (each of the hull's
+    vertices as a segment of its own would reach 260).  Left uncertified: 111 deep
+    rim-side minima whose rim point lies past the other's axis (delta would be R +
+    |p_xy|, beyond any point's R - |x_xy|; covering those needs the direction of t_xy,
+    not only its length), 109 cap minima (80 of them deeper than H) and 42 rim-side
+    ones, 32 crossings and 30 others."""
     q2 = px * px + py * py
     if radial:
         s = 1.0 if pz >= 0.0 else -1.0
@@ -593,7 +593,7 @@ def segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     p beyond the side's radius proves the cores apart (the segment misses even the
     unbounded cylinder), as an end past a cap's plane does.  No support of A - B, no
     Newton steps: ~20 ns.  Measured on bench/deep_pairs.py's 2,000 capsule-cylinder
-    cases (a numpy rehearsal against GJK + EPA at bbd9fa6): 314 of the 512 pairs whose
+    cases (a numpy model of it, GJK + EPA the reference): 314 of the 512 pairs whose
     cores overlap by more than 1e-3 * scale certified (275 by the side, 39 by a cap),
     depths within 4.4e-9 * scale of EPA's, normals within 8.0e-5 rad; the others are
     pushed out over a rim (no ball as deep as the depth fits in the cylinder there)."""
@@ -695,7 +695,7 @@ def ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     1,442 pairs the caps leave get past the bounds and Newton's first step (all 160
     side certificates among them).
     Measured on bench/deep_pairs.py's 2,000 ellipsoid-cylinder cases (this function run
-    with NUMBA_DISABLE_JIT, against GJK + EPA at bbd9fa6): 190 of the 601 pairs whose
+    with NUMBA_DISABLE_JIT, GJK + EPA the reference): 190 of the 601 pairs whose
     cores overlap by more than 1e-3 * scale certified (159 by the side, 31 by a cap; and
     one pair that overlaps less), depths within 2.5e-13 *
     scale of EPA's, normals within 1e-6 rad, and 527 of the 2,000 proved apart by a
@@ -913,12 +913,12 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     a cylinder's rim pressed into a hull's face (its normal the face's) is left to GJK
     and EPA, as no hull faces are kept.
     Measured on bench/deep_pairs.py's 2,000 cylinder-convex cases (this function run
-    with NUMBA_DISABLE_JIT, against GJK + EPA at 7cbaae1): 183 of the 953 pairs whose
-    cores overlap by more than 1e-3 * scale certified (170 by the side, 13 by a cap;
-    and 17 overlapping less), depths within 9.3e-9 * scale of EPA's (its nearest face),
-    normals within 2.2e-4 rad; 856 of the 2,000 proved apart, 457 of them pairs whose
-    bounding spheres overlap (those the batch kernel hands to GJK).  With _cover
-    (session 38, pure Python on the same cases): 240 of the 953."""
+    with NUMBA_DISABLE_JIT, GJK + EPA the reference): 240 of the 953 pairs whose
+    cores overlap by more than 1e-3 * scale certified (183 by a ball, 170 of them by the
+    side and 13 by a cap, the rest by _cover; and 17 pairs overlapping less), depths
+    within 9.3e-9 * scale of EPA's (its nearest face), normals within 2.2e-4 rad; 856
+    of the 2,000 proved apart, 457 of them pairs whose bounding spheres overlap (those
+    the batch kernel hands to GJK)."""
     # owner-less views: no reference counting on them (geometry.borrow_args)
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     res = borrow(res)

@@ -36,50 +36,29 @@ Phases of ``gjk_epa``
      With an ellipsoid (and no convex hull, _smooth_pair, _ellipsoid_box), GJK on
      curved cores closes its gap slowly (~25 steps to 1e-12 between two ellipsoids):
      once the gap is below GJK_POLISH_TOL |v|^2, Newton's method (_newton_min_support,
-     below) is tried from the current direction; 25 -> 14 steps between two
-     ellipsoids.  Where that direction is near a crease of h (a cylinder's side, a
+     below) is tried from the current direction (~14 steps in all between two
+     ellipsoids).  Where that direction is near a crease of h (a cylinder's side, a
      capsule's core or a box's edges, _kink_side) the minimum along the crease is
      searched instead (_kink_polish, as in EPA below): apart, h is convex and any
      local minimum below zero is the global one.  Once |v| proves that the shapes
      touch (so the exact distance is wanted), the crease search runs from the face
      test's gap below (0.1 |v|^2): near a crease GJK's direction is within ~0.025 rad
-     of it by then, and GJK needed 4-7 more steps to reach GJK_POLISH_TOL (session
-     20; figures in BENCHMARKS.md).  bench/deep_pairs.py, deep pairs
-     (many have an ellipsoid's cores apart): ellipsoid-box 2.94 -> 2.40 us (with
-     EPA's search along the box's creases), ellipsoid-capsule 2.42 -> 1.87,
-     ellipsoid-cylinder 3.21 -> 2.80, capsule-cylinder 2.71 -> 2.20 (with EPA's search
-     along the cylinder's).  Between a box or a cylinder and a sphere or an ellipsoid,
-     GJK also tests a box's face normal or a cylinder's axis near its direction once
-     its gap is below 0.1 |v|^2 (_face_polish, as EPA below, at most EPA_FACE_EVALS
-     supports): a minimum it finds with h < 0 is the global one.  bench/ab_deep.py
-     against the previous commit, deep pairs: ellipsoid-box 15.1 -> 14.4 steps, 0.945x
-     the time, ellipsoid-cylinder 18.7 -> 18.5 steps, 0.978x (the rows it does not
-     touch, identical, 0.982-0.986x in the same run); on 100,000 pairs per row the same
-     statuses, distances within 8.5e-13 * scale.  Tested from any gap (every GJK
-     step), it took 14.4 steps as well but made the GJK loop slower on every row, 4-5%
-     on rows it never runs on.
+     of it by then, 4-7 GJK steps before the gap reaches GJK_POLISH_TOL.  Between a
+     box or a cylinder and a sphere or an ellipsoid, GJK also tests a box's face normal
+     or a cylinder's axis near its direction once its gap is below 0.1 |v|^2
+     (_face_polish, as EPA below, at most EPA_FACE_EVALS supports): a minimum it finds
+     with h < 0 is the global one.  Only from that gap: tested at every GJK step, it
+     saves no steps and slows the GJK loop of every pair, those it never runs on too.
      Between a convex hull and an ellipsoid, GJK tests the hull's features near its
      direction once its gap is below GJK_POLISH_TOL |v|^2 (_hull_polish): the face of
      the three highest hull vertices (the face test), the crease of the edge of the
-     two highest (the search along it), or Newton's method in a vertex's region:
-     bench/ab_deep.py against 483e265, deep pairs, ellipsoid-convex 22.5 -> 19.2
-     steps, 0.891x the time (convex-ellipsoid 0.922x; rows it does not touch
-     0.991-1.038x, see _gjk_smooth_polish); on 100,000 pairs per row the same
-     statuses, distances within 7.5e-10 * scale.
+     two highest (the search along it), or Newton's method in a vertex's region.
      EPA does not: deeper than the ellipsoid core's radii of curvature, h is not
      convex around the hull's features, and their local minima lie as close as 0.03
-     rad (regression scene mkc_hull_face_polish_wrong_basin_ellipsoid_convex); with the
-     minima kept only where h is convex, EPA gained nothing (BENCHMARKS.md, session 19).
-     With the cap the face test proves (_face_basin), safe, EPA's test of the face of
-     the three highest vertices took fewer steps but more time (session 22,
-     bench/ab_deep.py against 3e90957, all pairs: ellipsoid-convex 1.067x,
-     cylinder-convex 1.150x: each try is passes over the hull's vertices; one try from
-     a gain of 1e-2 * scale saved 6% and 4% of the deep pairs' steps, pure-Python
-     count, about what the try costs).  Session 25: that face test and Newton's
-     method in a vertex's region at EPA's polish gain, the vertex's minimum taken by
-     the polytope or by its exact depth in the ellipsoid as a certificate (a basin
-     cap of 0.5 rad kept one 0.29 rad from a deeper one): deep ellipsoid-convex pairs
-     18.4 -> 17.4 steps, 1.04x the time (bench/ab_deep.py against 4eaaf95).
+     rad (regression scene mkc_hull_face_polish_wrong_basin_ellipsoid_convex).  Even
+     with the cap the face test proves (_face_basin), which makes it safe, EPA's test
+     of the face of the three highest vertices costs more time than the steps it
+     saves: each try is passes over the hull's vertices.
   2. When the cores overlap (origin inside the GJK tetrahedron, or |v| <=
      EPA_DEGEN_TOL * scale), EPA on the *cores*: the full difference is the core one
      grown by a ball of radius r_a + r_b, so depth = core depth + r_a + r_b exactly.
@@ -105,41 +84,31 @@ Phases of ``gjk_epa``
      across the crease and, between two cylinders, against the other crease and the
      point kinks nearby, and the same cap test (with a capsule, a cap of 0.05 rad,
      EPA_KINK_CAP_CAPSULE; on a box's crease 0.1 rad, EPA_KINK_CAP_BOX: regression scenes
-     mkc_crease_polish_wrong_basin_ellipsoid_capsule and _ellipsoid_box): deep
-     cylinder-cylinder pairs 5.2 -> 3.9 us,
-     ellipsoid-cylinder 6.2 -> 4.4, ellipsoid-capsule 3.6 -> 3.4 (bench/deep_pairs.py;
-     no depth on 100,000 deep random pairs per row off EPA's own by more than 1.2e-8 *
-     scale).  Between a box or a cylinder and a sphere or an ellipsoid, and between two
+     mkc_crease_polish_wrong_basin_ellipsoid_capsule and _ellipsoid_box); on 100,000
+     deep random pairs per row no depth is off EPA's own by more than 1.2e-8 * scale.
+     Between a box or a cylinder and a sphere or an ellipsoid, and between two
      cylinders (_epa_face_pair), when the best face's normal is near a box's face
      normal or a cylinder's axis, one support point there tells whether that normal is
      a minimum (_face_polish: the other shape's point projects into the face), from a
      gain of EPA_FACE_TOL * scale, and proves a cap around it with no deeper direction
-     (_face_basin), the cap of the test below (until session 22 a fixed 0.1 rad, and
-     no test between two cylinders; regression scene
+     (_face_basin), the cap of the test below (no fixed cap is safe: regression scene
      mkc_face_polish_wrong_basin_ellipsoid_cylinder).
      A minimum whose cap test fails stays a candidate and is tested again at every
-     later step as the polytope grows (until then EPA went on to the next try, 100x
-     closer, ~10 steps later): it is taken as soon as the test passes, or dropped when
-     EPA finds a direction deeper by more than the tolerance.  Two cylinders have
-     one crossing face, normal to both axes, so EPA tests it once at its start, with
-     no support (_cylinders_crossing), not at every step from its best face (session
-     26; pure-Python count, 300 cases, seed 5: deep cylinder-cylinder pairs 19.5 ->
-     19.0 GJK + EPA steps, those whose minimum is on that face 8.0 -> 6.5 EPA steps).
+     later step as the polytope grows: it is taken as soon as the test passes, or
+     dropped when EPA finds a direction deeper by more than the tolerance.  Two
+     cylinders have one crossing face, normal to both axes, so EPA tests it once at its
+     start, with no support (_cylinders_crossing), not at every step from its best face.
   Newton's method (_newton_min_support): min over unit u of h_{A-B}(u) is minus the
      signed distance in both regimes; the gradient of h on the sphere is the tangential
      part of the support point, the Hessian J - h I with J = d support / d u fitted by
      least squares to nearby support points (EPA's face vertices with the directions
      they were found along, GJK's last supports, then its own steps).  Quadratic where
      A - B is smooth and curved (ellipsoid cores): ~3 supports from a 1e-3 gap to a
-     step below POLISH_STEP_DONE (1e-6 rad; 1e-9 until session 18, 1e-7 until session
-     20, when it also became the step it would take next rather than the one taken).
-     It gives up on kinks of h (flat faces, edges, rims, segment cores), which is why
-     only ellipsoid pairs try it (cylinder pairs: kinks on every pair tried).  Measured
-     on 500 random pairs per type (process CPU per pair, one thread):
-     ellipsoid-ellipsoid with overlapping cores
-     9.2 -> 5.9 us, cores apart 2.6 -> 1.6 us; against a run at EPA_REL_TOL 1e-11 on
-     1500 pairs per type, normals within 3.8e-4 rad and distances within 1e-8 * scale,
-     as before.
+     step below POLISH_STEP_DONE (1e-6 rad, the step it would take next rather than the
+     one taken).  It gives up on kinks of h (flat faces, edges, rims, segment cores),
+     which is why only ellipsoid pairs try it (cylinder pairs: kinks on every pair
+     tried).  Against a run at EPA_REL_TOL 1e-11 on 1500 random pairs per type, its
+     normals are within 3.8e-4 rad and its distances within 1e-8 * scale.
   3. If a cap is hit (valleys of equally deep directions, e.g. a sphere centred on a
      cylinder's or cone's axis, two coaxial cylinders), the best upper bound min h(u)
      over the evaluated normals is polished by a pattern search over directions and
@@ -181,8 +150,8 @@ trustworthy; scale = sum of bounding radii):
     typically 1e-9; the residual is mostly coal's (its EPA stops early, often failing
     outright at tolerances below 1e-10).  Our own bound gap is < EPA_REL_TOL * scale =
     1e-8 * scale whenever EPA converges without Newton's method (with it: a stationary
-    point of h to a POLISH_STEP_DONE = 1e-6 rad step, and the cap test) (EPA_REL_TOL was
-    1e-10 until 2026-11-22; 1e-8 cuts EPA's work on smooth shapes ~2-3x and stays 100x
+    point of h to a POLISH_STEP_DONE = 1e-6 rad step, and the cap test) (EPA_REL_TOL
+    1e-8 rather than 1e-10 cuts EPA's work on smooth shapes ~2-3x and stays 100x
     inside the issue's 1e-6 * scale; the normal of a smooth contact is then within
     ~sqrt(2e-8) ~ 1.4e-4 rad of the exact one, its support value within 1e-8 * scale of
     the depth).  Every reported depth is within EPA_REL_TOL * scale of h_{A-B}(normal),
@@ -349,10 +318,10 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     docstring, "Trace").
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND/
     _GJK_STALL, the lower bound v.w / |v| for _GJK_BOUND, else 0).
-    Inlined into its two callers: as a called function it took 0.3 us more per deep pair
-    (cylinder-cylinder 4.26 -> 3.97 us, box-convex 2.49 -> 2.19, bench/deep_pairs.py),
-    more than the call itself (its ~75 words of array structs) can explain; inlining
-    _epa as well gained 2% on cylinders and lost 4% on ellipsoids, so it stays a call."""
+    Inlined into its two callers: as a called function it costs ~0.3 us more per deep
+    pair (bench/deep_pairs.py), more than the call itself (its ~75 words of array
+    structs) can explain.  _epa stays a call: inlined, it is hardly faster on cylinders
+    and slower on ellipsoids."""
     fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
@@ -685,7 +654,7 @@ def _face_plane(V, F, FN, FD, f, cin):
         FN[f, 0], FN[f, 1], FN[f, 2] = 0.0, 0.0, 0.0
         FD[f] = np.inf
         return False
-    inv = 1.0 / nn        # one division, not three (a third of EPA's step was these)
+    inv = 1.0 / nn        # one division, not three (three would be a third of EPA's step)
     nx *= inv
     ny *= inv
     nz *= inv
@@ -885,10 +854,9 @@ def _kink_partner(code):
     """Whether _kink_polish may run against a shape of this code: a cylinder (whose
     crease and point kinks it searches too), one with no kinks (sphere and ellipsoid
     cores) or a capsule's core (its crease is left to EPA where the two creases cross,
-    _kink_side, and the basin cap is EPA_KINK_CAP_CAPSULE: deep capsule-cylinder pairs
-    17.0 -> 16.5 steps).  Boxes, cones and convex hulls put creases and flat faces near
-    the minimum that it does not rule out (box-cylinder and cylinder-convex pairs
-    gained nothing when it ran there)."""
+    _kink_side, and the basin cap is EPA_KINK_CAP_CAPSULE).  Boxes, cones and convex
+    hulls put creases and flat faces near the minimum that it does not rule out (run
+    there, it saves box-cylinder and cylinder-convex pairs nothing)."""
     return code == CYLINDER or code == ELLIPSOID or code == SPHERE or code == CAPSULE
 
 
@@ -1081,10 +1049,10 @@ def _hull_side(ca, cb):
     """The side (0: A, 1: B) of a convex hull paired with an ellipsoid, whose features
     GJK on cores apart tests (_hull_polish); -1 for other pairs.  Against a sphere (a
     point core) GJK is exact in a few steps already.  Against a cylinder the same tests,
-    with the cylinder's direction kept away from its crease and axis, took more steps
-    in EPA (cylinder-convex 19.8 -> 21.0 deep pairs, pure-Python count: the searches
-    along a hull edge's crease that cross the cylinder's give up), and against a box or
-    a cone their creases and faces would need ruling out as well."""
+    with the cylinder's direction kept away from its crease and axis, cost EPA steps
+    on deep cylinder-convex pairs (the searches along a hull edge's crease that cross
+    the cylinder's give up), and against a box or a cone their creases and faces would
+    need ruling out as well."""
     if ca == CONVEX and cb == ELLIPSOID:
         return 0
     if cb == CONVEX and ca == ELLIPSOID:
@@ -1135,13 +1103,12 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, dx, dy, dz):
     Why: a hull's support along the directions normal to one of its edges (the arc of
     the great circle normal to the edge between the normals of the two faces through
     it) is that whole edge, so h has a crease along that arc, as along a box's edges
-    (_kink_polish), and at a face's normal a point kink, as at a box's.  Measured on
-    deep ellipsoid-convex pairs: 53 of 139 have their deepest direction on an edge's
-    crease, where GJK and EPA took 29.5 steps, 73 on a face normal (15.9 steps), 13 in
-    a vertex's region (32.9 steps).
+    (_kink_polish), and at a face's normal a point kink, as at a box's.  Of 139 deep
+    ellipsoid-convex pairs, 53 have their deepest direction on an edge's crease, 73 on
+    a face normal and 13 in a vertex's region.
 
     The edge: searched if d lies within EPA_KINK_NEAR rad of its crease, also near a
-    face's normal that is no minimum (skipping the search within 5e-3 rad of one took
+    face's normal that is no minimum (skipping the search within 5e-3 rad of one costs
     0.05 more steps per deep pair, within 0.05 rad 0.6 more).  Then _crease_min along
     the circle normal to the edge, and the minimum is kept only if h there is the
     lowest the search evaluated, the edge is still the hull's support there (its two
@@ -1244,21 +1211,19 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, axis):
     EPA_POLISH_CAP of the first search's minimum, as farther the basin test covers it;
     the deeper of the two converged minima is the candidate, and a search that gave up
     but went deeper rejects it) and the point kinks of _kink_points.  Where two creases
-    pass close
-    by, each has a minimum of its own (measured before this check: 4 of 40,000 deep
-    random cylinder-cylinder and capsule-cylinder pairs whose kept minimum was up to
-    4.3e-4 * scale shallower than the deepest direction, on the other crease 0.13-0.29
-    rad away; regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  EPA
-    then applies _polish_is_global as to Newton's method; GJK on cores apart needs no
-    such test (h is convex there: a minimum on the sphere below zero is the global
-    one).  None of those checks is needed when the first search's minimum is the
-    depth by _ball_certified (a witness with a ball of radius h inside the other
-    shape's core): the search ends there (session 24: deep cylinder-cylinder pairs 17.0
-    -> 16.0 GJK + EPA steps with the certificate, pure-Python count).  Results as
-    _newton_min_support's (ws t3 rows 15-18: direction, difference point, witnesses on
-    A and B, the cylinder's one slid to that point), stored only when it succeeds (a
-    minimum EPA holds pending its basin test stays there otherwise); returns the
-    number of support evaluations, negated when it gave up."""
+    pass close by, each has a minimum of its own (without this check, 4 of 40,000 deep
+    random cylinder-cylinder and capsule-cylinder pairs keep a minimum up to 4.3e-4 *
+    scale shallower than the deepest direction, on the other crease 0.13-0.29 rad away;
+    regression scene mkc_crease_polish_other_crease_cylinder_cylinder).  EPA then
+    applies _polish_is_global as to Newton's method; GJK on cores apart needs no such
+    test (h is convex there: a minimum on the sphere below zero is the global one).
+    None of those checks is needed when the first search's minimum is the depth by
+    _ball_certified (a witness with a ball of radius h inside the other shape's core):
+    the search ends there.  Results as _newton_min_support's (ws t3 rows 15-18:
+    direction, difference point, witnesses on A and B, the cylinder's one slid to that
+    point), stored only when it succeeds (a minimum EPA holds pending its basin test
+    stays there otherwise); returns the number of support evaluations, negated when it
+    gave up."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     fs = ws[0]
@@ -1281,8 +1246,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, axis):
     both = sa[0] == CYLINDER and sb[0] == CYLINDER
     ox, oy, oz = _axis_of(1 - side, 2, r_ab)
     # the other cylinder's crease is searched only where it passes within the basin cap
-    # (EPA_POLISH_CAP) of the minimum found: farther, _polish_is_global's test covers
-    # it (cylinder-cylinder deep pairs 20.5 -> 19.8 steps, pure-Python count)
+    # (EPA_POLISH_CAP) of the minimum found: farther, _polish_is_global's test covers it
     if both and not (r[0] and abs(r[4] * ox + r[5] * oy + r[6] * oz) > _SIN_CAP):
         r2 = _crease_min(sa, sb, verts, r_ab, t_ab, scale, ox, oy, oz,
                          d[0], d[1], d[2])
@@ -1348,7 +1312,7 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap, first):
     the distance FD[g] / (u . FN[g]), and h(u) is at least that distance.  So h(u) <
     hmin = h(n) - tol needs an exit face with FD[g] < hmin.  Inside a cap of ``cap`` rad
     around n (EPA_POLISH_CAP; EPA_KINK_CAP_CAPSULE for a minimum on a capsule's crease:
-    at 0.5 rad, 2 of 100,000 deep random ellipsoid-capsule pairs kept a crease minimum
+    at 0.5 rad, 2 of 100,000 deep random ellipsoid-capsule pairs keep a crease minimum
     up to 4e-5 * scale shallower than a smooth one 0.09-0.19 rad off the crease, both in
     a valley flat to 1e-4 * scale), the minimum the polish converged to is taken to be
     the only one; outside it, no direction may reach deeper than hmin:
@@ -1358,16 +1322,16 @@ def _polish_is_global(V, F, FN, FD, nf, n, hmin, planes, cap, first):
       (sphere and ellipsoid cores only) and by _kink_polish, which searches the
       creases and point kinks nearby itself.  Sharper than the vertex test: the faces
       along a cylinder's side span ~1.2 rad from the minimum with their planes within
-      the gain of it, which failed the vertex test on every deep cylinder pair
-      polished on the crease.
-    * else every such face must lie, with all three vertices, in the cap around n (as
-      until 2026-11-24).  With the plane test, Newton's method on an ellipsoid against
-      a cylinder or a capsule kept a smooth minimum 0.24-0.40 rad from a deeper one on
-      the other shape's crease or cap normal (3 of 200,000 deep random pairs).
+      the gain of it, which fail the vertex test on every deep cylinder pair polished
+      on the crease.
+    * else every such face must lie, with all three vertices, in the cap around n.
+      With the plane test there, Newton's method on an ellipsoid against a cylinder or
+      a capsule keeps a smooth minimum 0.24-0.40 rad from a deeper one on the other
+      shape's crease or cap normal (3 of 200,000 deep random pairs).
 
-    A face deeper than hmin beyond the cap means another basin may be deeper
-    (measured: an ellipsoid-cone pair whose polished minimum was 2e-4 * scale too
-    shallow, its normal 2.8 rad off): EPA goes on.
+    A face deeper than hmin beyond the cap means another basin may be deeper (e.g. an
+    ellipsoid-cone pair whose polished minimum is 2e-4 * scale too shallow, its normal
+    2.8 rad off): EPA goes on.
 
     Returns -1 when the minimum passes, else the index of a face that fails; EPA
     passes it back as ``first`` (-1 for none) at the next test of the same minimum."""
@@ -1428,9 +1392,9 @@ def _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz):
 @njit_inline
 def _face_pair(ca, cb):
     """Whether GJK on cores apart tries _face_polish on this pair of shape codes: a box
-    or a cylinder against a sphere or an ellipsoid (until session 22 EPA's rule too,
-    now _epa_face_pair; against other shapes GJK's use is not measured).  A convex
-    hull's faces: _hull_polish, near GJK's end only."""
+    or a cylinder against a sphere or an ellipsoid (EPA's rule: _epa_face_pair; against
+    other shapes GJK's use is not measured).  A convex hull's faces: _hull_polish, near
+    GJK's end only."""
     faced = ca == BOX or ca == CYLINDER or cb == BOX or cb == CYLINDER
     round_ = ca == SPHERE or ca == ELLIPSOID or cb == SPHERE or cb == ELLIPSOID
     return faced and round_
@@ -1442,9 +1406,8 @@ def _epa_face_pair(ca, cb):
     or a cylinder against a sphere or an ellipsoid), or two cylinders.  The face
     test's first-order rise and the basin it proves (_face_basin) hold whatever the
     other shape (they use one point of it, not its smoothness), but against a box or
-    a convex hull the test cost more than it saved (bench/ab_deep.py against
-    3e90957, all pairs: box-convex 1.028x; cylinder-convex 1.150x with a hull's faces
-    tested as well, see _face_basin), and cones are not measured."""
+    a convex hull the test costs more than it saves (bench/ab_deep.py; against a hull,
+    with its faces tested as well, see _face_basin), and cones are not measured."""
     return _face_pair(ca, cb) or (ca == CYLINDER and cb == CYLINDER)
 
 
@@ -1475,8 +1438,8 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
     to the sides, the segments' parameters' distances to their ends times the sine of
     the angle between the segments).  Measured on deep pairs (pure-Python count,
     bench.common.pair_cases seed 11): the minimum lies there in 168 of 317
-    cylinder-convex pairs (a hull edge against the side) and in ~27% of cylinder pairs
-    (session 5); before, EPA found such a face by its four corners.  A hull's edge is
+    cylinder-convex pairs (a hull edge against the side) and in ~27% of cylinder pairs;
+    without the test, EPA finds such a face only by its four corners.  A hull's edge is
     checked to be its support along n by a pass over its vertices; a cylinder's side
     is its support along every n normal to its axis.
 
@@ -1572,10 +1535,9 @@ def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
     face lies at the same segment parameters (the difference of the two faces is a
     shift along n): where it falls outside the lower face, it falls outside the
     other as well.  So one test, with no support, decides it before EPA's normal
-    comes near n: EPA holds the minimum from its first step (pure-Python count, 300
-    cases, seed 5: deep cylinder pairs whose minimum is there 8.0 -> 6.5 EPA steps),
-    and its per-step test, a call that mostly found d near no crossing, is gone for
-    this pair.  Axes parallel within 1e-6: no face."""
+    comes near n: EPA holds the minimum from its first step, and its per-step test
+    (_crossing_test, a call that mostly finds d near no crossing) does not run for this
+    pair.  Axes parallel within 1e-6: no face."""
     nx, ny, h, s, u, sn = sides_crossing(sa, sb, r_ab, t_ab)
     if not sn > 0.0:
         return False
@@ -1722,11 +1684,11 @@ def _ball_certified(sa, sb, r_ab, t_ab, hmin, nx, ny, nz, ax, ay, az, bx, by, bz
     and the ball inside the other core.)  It applies where the depth is small beside
     the containing shape's size (a ball of radius h(n) must fit): of the deep pairs of
     bench.common.pair_cases (depth > 1e-3 * scale, up to ~0.6 * scale; pure-Python
-    count, 400 cases, seed 5) it took 81 of 190 cylinder-cylinder pairs and 27 of 193
+    count, 400 cases, seed 5) it takes 81 of 190 cylinder-cylinder pairs and 27 of 193
     cylinder-convex ones (the face and crossing tests' minima and the crease search's).
-    The crease search taken sooner for it (from a gain of 1e-2 * scale) took more
-    steps where only certified minima were kept, and was wrong where the basin test
-    kept the others (BENCHMARKS.md session 24; regression scene
+    The crease search is not taken sooner for it (from a gain of 1e-2 * scale): that
+    costs steps where only certified minima are kept, and is wrong where the basin test
+    keeps the others (regression scene
     mkc_early_crease_search_wrong_basin_ellipsoid_cylinder).
 
     An ellipsoid's core holds no ball about a point with a closed form, but it holds
@@ -1736,8 +1698,8 @@ def _ball_certified(sa, sb, r_ab, t_ab, hmin, nx, ny, nz, ax, ay, az, bx, by, bz
     a box's or a cylinder's whole core (a ball about q of radius rho against it: the
     core grown by rho, which holds the ball of radius rho + _core_depth(q) about q) at
     least rho + _core_depth(q).  At the minimum (w = h n) the first is h wherever the
-    balls' radii add up to h.  Measured (session 36, deep pairs of bench.common's
-    cases, 2,000 per row, on the reported minima): the ellipsoid's ball certifies 590
+    balls' radii add up to h.  On the deep pairs of bench.common's cases (2,000 per
+    row, at the reported minima) the ellipsoid's ball certifies 590
     of 961 ellipsoid-box pairs where the ball of radius P_ROLL alone (the core's
     point) does 502, 708 of 992 ellipsoid-cylinder (598), 847 of 988
     ellipsoid-ellipsoid."""
@@ -1799,10 +1761,9 @@ def _face_polish(sa, sb, verts, r_ab, t_ab, scale, ws, dx, dy, dz):
     on cores apart (h < 0 at f) the local minimum is the global one (h is convex
     there).  EPA then applies _polish_is_global with the plane test under the cap
     the test proves (ws t3 row 3, _face_basin).  Another local minimum may lie close
-    by, so no fixed cap is safe: at 0.5 rad, a minimum on a cylinder's axis was kept
-    0.31 rad from a deeper one, 9e-4 * scale below it, in 1 of 100,000 random
-    ellipsoid-cylinder pairs (regression scene
-    mkc_face_polish_wrong_basin_ellipsoid_cylinder; then 0.1 rad until session 22).
+    by, so no fixed cap is safe: at 0.5 rad, 1 of 100,000 random ellipsoid-cylinder
+    pairs keeps a minimum on a cylinder's axis 0.31 rad from a deeper one, 9e-4 * scale
+    below it (regression scene mkc_face_polish_wrong_basin_ellipsoid_cylinder).
     A convex hull's faces: _hull_face_test.
 
     Inlined: only the test whether d is near a face normal, which fails at most of
@@ -1872,8 +1833,8 @@ def _face_basin(rin, h):
     the cap is the whole basin there (tests/test_gjk_epa.py checks both).
 
     The same holds on a convex hull's face (rin: the foot's least distance to the
-    triangle's edges); EPA's test of hull faces with it was measured slower, see the
-    module notes (session 22)."""
+    triangle's edges); EPA does not test hull faces with it, as the test costs more
+    time than it saves (module docstring, phase 1)."""
     if not h > 0.0:
         return 0.0
     return min(2.0 * math.atan(rin / h), EPA_FACE_CAP_MAX)
@@ -1954,21 +1915,16 @@ def _smooth_pair(ca, cb):
     """Whether GJK and EPA should try _newton_min_support on this pair of shape codes:
     one is an ellipsoid (its core makes h smooth and curved around whole regions of
     directions) and neither is a box or a convex hull (their flat faces put the minimum
-    on a kink of h, where the fit fails after spending supports: measured a loss of
-    4-7% on ellipsoid-box and -convex, and nothing gained).  On pairs without an
-    ellipsoid, e.g. two cylinders, the fit found kinks on every pair tried, with
+    on a kink of h, where the fit fails after spending supports: it costs 4-7% of the
+    time on ellipsoid-box and -convex pairs and gains nothing).  On pairs without an
+    ellipsoid, e.g. two cylinders, the fit finds kinks on every pair tried, with
     one exception EPA makes: two cylinders where its best face's normal is near
     neither side's crease (_kink_side -1).  There h is smooth but at the caps'
-    normals, and the deepest direction is mostly a rim against a rim, which EPA took
-    longest to close on (EPA_POLISH_CAP's basin test then as for an ellipsoid
-    against a cylinder, the vertex test of _polish_is_global).  Session 34,
-    pure-Python count over the penetrating pairs of bench/common.pair_cases (2,000
-    cases, seeds 0 and 1): 19,165 -> 18,521 GJK + EPA steps, the rim-rim pairs of
-    seed 0 38.4 -> 31.2 steps each, those on a cap's normal unchanged (14.1).
-    Against the kernels before it (bench/ab_deep.py, 300,000 cases): every status
-    the same, depths deeper by at most 9.9e-9 * scale (h at a minimum against EPA's
-    face bound) and shallower by at most 3.5e-9 * scale, both inside EPA_REL_TOL.
-    Against a capsule, the same took 0.5% more steps."""
+    normals, and the deepest direction is mostly a rim against a rim, which EPA takes
+    longest to close on and Newton's method shortens (EPA_POLISH_CAP's basin test then
+    as for an ellipsoid against a cylinder, the vertex test of _polish_is_global); the
+    depths it gives stay within EPA_REL_TOL * scale of EPA's face bound.  Against a
+    capsule it saves no steps."""
     if ca != ELLIPSOID and cb != ELLIPSOID:
         return False
     return ca != BOX and ca != CONVEX and cb != BOX and cb != CONVEX
@@ -1992,11 +1948,9 @@ def _ellipsoid_box(ca, cb):
     their cores in a vertex's region of the box only (_kink_side finds the edges'
     creases and the face normals, where two of them cross).  EPA keeps the minimum
     under the plane test in the cap that no crease of the box crosses (_vertex_cap),
-    or, nearer a crease than EPA_VERTEX_CAP_MIN, if a ball proves it.  An earlier
-    count (29.7 -> 28.4 steps on the 92 of 960 deep pairs with their minimum there)
-    had judged it not worth a basin test that must also rule out the nearby edges;
-    with the cap short of them it is one test: pure-Python count on 300 deep pairs of
-    bench/deep_pairs.py's cases, 14.04 -> 13.51 supports per pair (session 36)."""
+    or, nearer a crease than EPA_VERTEX_CAP_MIN, if a ball proves it.  With the cap
+    short of the edges, that basin test is a single one: it need not rule out the
+    nearby edges' creases."""
     return (ca == ELLIPSOID and cb == BOX) or (ca == BOX and cb == ELLIPSOID)
 
 
@@ -2016,9 +1970,9 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
     finds: _newton_min_support (same arguments and return), but between a convex hull
     and an ellipsoid first the tests of the hull's features near n (_hull_polish),
     Newton's method only in a vertex's region.  A function of its own so that _gjk's
-    loop, inlined into its callers, keeps the code it had: with the hull's branch
-    written into it, deep pairs of rows that never take the branch took 4-7% more
-    time (capsule-cylinder, cylinder-cylinder, cylinder-convex, box-cylinder,
+    loop, inlined into its callers, stays lean: with the hull's branch written into
+    it, deep pairs of rows that never take the branch take 4-7% more time
+    (capsule-cylinder, cylinder-cylinder, cylinder-convex, box-cylinder,
     sphere-convex; bench/ab_deep.py, identical results)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
@@ -2394,10 +2348,10 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
         # horizon edge starting at b; across (new vertex, a), the one of the edge
         # ending at a (the horizon is a loop).  As built, every new face is (a, b, nv),
         # so those spokes are its neighbours' edges 2 and 1 (O(1) each, no search: a
-        # search over the horizon had cost, with the best-face scan, 5-13% of a
-        # penetrating pair's time; the search of g's edge, ~9% of a deep box-cylinder
-        # pair's EPA, is gone with the twin index).  If _face_setup flipped some, the
-        # twins are looked up.
+        # search over the horizon costs, with the best-face scan, 5-13% of a
+        # penetrating pair's time; g's edge comes with the twin index, where a search
+        # of it costs ~9% of a deep box-cylinder pair's EPA).  If _face_setup flipped
+        # some, the twins are looked up.
         for q in range(ne):
             f = newf[q]
             a, b, pg = edges[q, 0], edges[q, 1], edges[q, 2]

@@ -2,7 +2,7 @@
 and EPA: the exact depth of the cylinder C and the hull B over B's normal fan, as
 hullell.py does for an ellipsoid (gjk_epa.gjk_epa_ws calls cylinder_hull_depth first for
 such a pair when the hull has its fan stored; where it decides nothing, cylcyl's
-hull_cylinder_depth, then GJK and EPA run as before).
+hull_cylinder_depth, then GJK and EPA run as for any pair).
 
 The problem, in C's frame (axis z, radius R, half-height H): the depth is min over unit
 n of f(n) = h_C(n) + h_B(-n), with h_C(n) = R |n_xy| + H |n_z|.  C's normal fan is its
@@ -46,11 +46,11 @@ nearest B's origin inside B); else by GJK's boolean form on B - C in C's frame
 solved), which ends at a tetrahedron holding the origin or at a plane proving the
 pair apart.  In bench/vs_mujoco.py's cylinder-convex row it decides all 202 pairs the
 cheap proofs leave (107 overlapping in 7.6 steps on average, 95 apart in 8.5, ~50 ns a
-step); before it, each went to gjk_epa_ws's GJK (~0.3 us a step, its closest-point
-solve) and the overlapping ones came back here a second time.  Only where it decides
-nothing (a gap within the caller's ``stop``, a flat tetrahedron, the cap) gjk_epa_ws
-runs GJK first and calls the kernel again once GJK has found the cores overlapping, in
-place of EPA.  Before that, C's centre's offsets below the face planes: the plane it
+step), where gjk_epa_ws's GJK takes ~0.3 us a step (its closest-point solve) and would
+send the overlapping ones back here a second time.  Only where it decides nothing (a
+gap within the caller's ``stop``, a flat tetrahedron, the cap) gjk_epa_ws runs GJK
+first and calls the kernel again once GJK has found the cores overlapping, in place of
+EPA.  Before that, C's centre's offsets below the face planes: the plane it
 lies farthest beyond, the side's tangent plane toward B's centre, the caps' planes,
 and in the face pass any face's plane, with B wholly beyond it by more than the
 caller's ``stop``, end the call with that gap as a bound (as GJK's first separating
@@ -70,7 +70,7 @@ the row's deep pairs, per pair: ~43 faces, ~64 edges of which ~1.6 pass the chor
 and ~0.9 the arc bound, ~0.3 rim root searches.  The unpredictable branches (a face
 normal's sign along the axis, whether a vertex lies inside C) are copysign and max:
 as branches they cost ~0.4 us per pair in mispredictions.  Figures of time:
-BENCHMARKS.md (session 44).
+BENCHMARKS.md.
 """
 import math
 

@@ -5,9 +5,9 @@ its fan stored, mkcollision_ros.hull.fan_rows; where it decides nothing GJK and 
 run as for any pair).
 
 Why: on overlapping ellipsoid-hull pairs EPA needs ~16 supports of A - B when the
-minimum lies at a hull face, ~30 at an edge and ~47 at a vertex (BENCHMARKS.md,
-session 41), each a pass over the hull's points; the fan needs one pass over the faces,
-bounds for most edges and vertices, and a few Newton searches.
+minimum lies at a hull face, ~30 at an edge and ~47 at a vertex, each a pass over the
+hull's points; the fan needs one pass over the faces, bounds for most edges and
+vertices, and a few Newton searches.
 
 The problem, in E's frame (E centred at the origin, squared semi-axes l_i): the depth
 is min over unit n of f(n) = h_E(n) + h_B(-n), h the support function.  B's normal fan
@@ -56,9 +56,9 @@ the hull's image is a hull, so GJK there is a point against a polytope, on the
 vertices already in E's frame, with no square root per support).  That GJK decides the
 rest of the row's overlapping pairs in 1.4 steps on average and proves its pairs apart
 with bounding spheres overlapping that no face plane ends in 0.7 (bench/vs_mujoco.py's
-ellipsoid-convex row; a numpy prototype, /tmp).  Only where it decides nothing (its
-plane's gap within the caller's ``stop``, the cap) gjk_epa_ws runs GJK on the cores
-and calls the kernel again once GJK has found them overlapping, in place of EPA.
+ellipsoid-convex row).  Only where it decides nothing (its plane's gap within the
+caller's ``stop``, the cap) gjk_epa_ws runs GJK on the cores and calls the kernel again
+once GJK has found them overlapping, in place of EPA.
 Before all that, E's centre's offsets below the face planes (three products per
 face): the plane it lies farthest beyond is tried first for a separating plane, and
 one with E's core beyond it by more than the caller's ``stop`` ends the call with that
@@ -71,10 +71,9 @@ decides nothing.
 The answer is for E's core, which is E shrunk by its rolling radius (geometry.py), and
 B's core, the hull of its points: res = [U - r, n, pa, pb] as boxell's.
 
-Measured on bench/deep_pairs.py's 1,016 deep ellipsoid-convex pairs by the prototype
-of session 41 (bench/hull_fan.py, removed once this module took its place; it is in
-commit 1932f47): every pair decided, the depth within 9.5e-9 * scale and the normal
-within 4e-4 rad of GJK/EPA's (EPA's own tolerance).  Figures of time: BENCHMARKS.md.
+Measured on bench/deep_pairs.py's 1,016 deep ellipsoid-convex pairs: every pair
+decided, the depth within 9.5e-9 * scale and the normal within 4e-4 rad of GJK/EPA's
+(EPA's own tolerance).  Figures of time: BENCHMARKS.md.
 """
 import math
 

@@ -10,8 +10,8 @@ fusing multiply-adds on CPUs with FMA, so two *different* compiled copies of the
 arithmetic may differ in the last bits; the project never mixes copies in one result.
 
 Hot paths: numba passes every array to a called function with an atomic increment and
-decrement of its reference count, and on this machine those atomics were 60% of a
-closed-form pair's time (perf: ``lock incq`` in NRT_incref).  Two tools remove them:
+decrement of its reference count, and those atomics can be 60% of a closed-form
+pair's time (perf: ``lock incq`` in NRT_incref).  Two tools remove them:
 ``borrow(a)`` gives a view of ``a`` without an owner (null meminfo, so numba's refcount
 calls return at once), used by the batch kernels on their arguments and scratch
 buffers; the owner must outlive the view, which ``keep_alive(owner)`` after the last use
@@ -37,18 +37,18 @@ First compile: numba's inliner copies a callee's IR at every call site of an
 ``njit_inline`` function (and again for each level of nesting).  Two measures keep that
 cheap, both active only while numba compiles and neither changing what is compiled:
 - Python's cyclic collector: the copies are millions of short-lived objects, and its
-  young-generation passes ran every 700 allocations.  A listener on numba's
+  young-generation passes run every 700 allocations.  A listener on numba's
   ``numba:compile`` event (numba's documented event API) raises the thresholds to
   COMPILE_GC_THRESHOLDS from the start of the outermost compile to its end.
 - One copy of a callee's scope per call site (``_one_memo_inliner``): numba's
   ``InlineWorker.inline_ir`` deep-copies the callee's blocks one by one, each with a
   memo of its own, and every block refers to the function's scope, which holds every
-  variable of the function; so the whole scope was copied once per block (blocks times
-  variables).  During ``inline_ir`` the module's ``copy`` is replaced by one whose
+  variable of the function; so the whole scope would be copied once per block (blocks
+  times variables).  During ``inline_ir`` the module's ``copy`` is replaced by one whose
   ``deepcopy`` shares a single memo, so the blocks of one copy share one scope copy, as
   the original blocks share one scope.  The LLVM IR numba emits is the same text
-  (``tests/test_jit.py`` compares it with and without); ``mpr_ws`` compiled alone took
-  about a third less time.  It is applied to numba 0.68.1 only, the pinned version
+  (``tests/test_jit.py`` compares it with and without), and ``mpr_ws`` alone compiles
+  in about two thirds of the time.  It is applied to numba 0.68.1 only, the pinned version
   whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
 
 "Literal": an integer constant passed to a compiled (not inlined) kernel is typed

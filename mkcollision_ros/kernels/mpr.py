@@ -62,9 +62,8 @@ from .tracebuf import (TR_HEADER_ROWS, TR_MPR_DISCOVERY, TR_MPR_REFINEMENT, trac
 
 # The working rows are w, wa, wb (5, 3): support points of D = A - B and of A and B,
 # row 0 the interior point v0, rows 1-3 the portal, row 4 the new support point.
-# Vectors are handled as scalar triples (no array temporaries: an earlier version built
-# a small array per cross product and difference, and spent most of its time in the
-# allocator: sphere-sphere 1.4 us per pair).
+# Vectors are handled as scalar triples (no array temporaries: a small array per cross
+# product and difference would spend most of MPR's time in the allocator).
 
 
 @njit_inline

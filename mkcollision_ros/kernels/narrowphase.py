@@ -10,16 +10,110 @@ pair, so the per-pair path allocates nothing.  Each pair writes only its own row
 ``out`` / ``status`` and no state survives between pairs, so the result does not depend
 on the thread count.
 
-Method codes (constants.M_*):
-  M_AUTO               the closed form when one exists (kernels/analytic.py), else GJK/EPA
-  M_GJK_EPA            kernels/gjk_epa.py (planes: ST_NOT_RUN)
-  M_MPR                kernels/mpr.py (planes: ST_NOT_RUN); a separated answer inside
-                       the touching band is settled by GJK (the touching rule)
-  M_ANALYTIC           kernels/analytic.py (ST_NOT_RUN for pairs without a closed form)
-  M_ELLIPSOID_EXACT    kernels/ellipsoid.py ``ellipsoid_exact`` decides the status;
-                       distance, normal and witness points are GJK/EPA's (metres)
-  M_ELLIPSOID_SAMPLED  kernels/ellipsoid.py ``ellipsoid_sampled`` with
-                       ELLIPSOID_SAMPLED_SUBDIV subdivisions, likewise
+Route of one pair in ``collide_world_ws`` (behind collide_world and collide_batch):
+  1. Two bodies without a plane whose bounding spheres (P_RADIUS about the body origins)
+     are apart by more than max(cutoff, TOUCH_TOL * scale) end SEPARATED with that gap,
+     whatever the method (never with cutoff inf, which collide_world passes).
+  2. Methods auto and analytic: a shape against a half-space, a sphere against a shape
+     with a sphere-* closed form, and two capsules are solved in the world frame.
+  3. Otherwise B's pose in A's frame (r_ab, t_ab), then the method's kernel; a pair out
+     of canonical order goes through collide_pair_ws (_run_ordered on the swapped pair).
+  collide_pair / collide_pair_ws skip step 1 and run the closed forms of step 2 in A's
+  frame (analytic.collide_analytic).
+
+Pair table, method auto.  Shape codes in canonical order (constants.py): sphere 0,
+ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
+  CF     a closed form: exact at any distance, no fallback.
+  G      gjk_epa.gjk_epa_ws: GJK on the cores (_gjk); EPA on the cores (_epa) when they
+         overlap; _caps_fallback when GJK stalls or EPA hits its caps (the pair's closed
+         form by analytic.collide_analytic, else mpr.mpr_ws).
+  G-pre  a pair kernel that gjk_epa_ws runs before GJK.  It answers with a certified core
+         depth ("depth"), or with a plane proving the cores farther apart than
+         max(cutoff, touching band), that gap a certified lower bound ("apart");
+         anything else continues with G.
+  A margin grows the core (kernels/geometry.py) and changes no route but
+  sphere-ellipsoid's here (and the ellipsoid methods', below).
+
+  pair                 first answer                        covers; then
+  sphere-sphere        analytic.sphere_world               CF
+  sphere-ellipsoid     analytic.sphere_world               CF if the ellipsoid has no
+                                                           margin; with one, G
+  sphere-box           analytic.sphere_world               CF
+  sphere-capsule       analytic.sphere_world               CF
+  sphere-cylinder      analytic.sphere_world               CF
+  sphere-cone          analytic.sphere_world               CF
+  sphere-convex        G                                   -
+  sphere-plane         _half_space_world                   CF
+  ellipsoid-ellipsoid  G                                   -
+  ellipsoid-box        G-pre boxell.ellipsoid_box_depth    depth at a face, the exact
+                                                           distance over a face, edge or
+                                                           vertex, or apart; then G
+  ellipsoid-capsule    G                                   -
+  ellipsoid-cylinder   G-pre cylcyl.ellipsoid_cylinder_depth  depth or apart; then G
+  ellipsoid-cone       G                                   -
+  ellipsoid-convex     G-pre hullell.ellipsoid_hull_depth  a hull with its fan stored:
+                                                           HE_EXACT, HE_APART; HE_UNPROVED:
+                                                           G, and once GJK finds the cores
+                                                           overlapping, this kernel again
+                                                           in place of EPA; no fan or
+                                                           HE_UNDECIDED: G
+  ellipsoid-plane      _half_space_world                   CF
+  box-box              _box_box: analytic.box_box_sat      cores overlapping: exact depth;
+                                                           apart by more than max(cutoff,
+                                                           touching band): SAT's lower
+                                                           bound; else G
+  box-capsule          analytic.closed_form_ordered        CF (analytic._box_capsule; out
+                                                           of order: collide_analytic)
+  box-cylinder         G-pre boxcyl.box_cylinder_depth     depth or apart; then G
+  box-cone             G                                   -
+  box-convex           G                                   -
+  box-plane            _half_space_world                   CF
+  capsule-capsule      analytic.capsule_capsule_world      CF
+  capsule-cylinder     G-pre cylcyl.segment_cylinder_depth  depth or apart; then G
+  capsule-cone         G                                   -
+  capsule-convex       G                                   -
+  capsule-plane        _half_space_world                   CF
+  cylinder-cylinder    G-pre cylcyl.cylinders_depth        depth or apart; then G
+  cylinder-cone        G                                   -
+  cylinder-convex      G-pre hullcyl.cylinder_hull_depth   as ellipsoid-convex, but no fan
+                                                           or HE_UNDECIDED: G-pre
+                                                           cylcyl.hull_cylinder_depth
+                                                           (depth or apart), then G
+  cylinder-plane       _half_space_world                   CF
+  cone-cone            G                                   -
+  cone-convex          G                                   -
+  cone-plane           _half_space_world                   CF
+  convex-convex        G                                   -
+  convex-plane         _half_space_world                   CF
+  plane-plane          none                                ST_NOT_RUN (every method)
+A traced GJK/EPA workspace with its iterate option set skips the G-pre kernels
+(gjk_epa.py, "Trace").  The row's method code is M_ANALYTIC for a closed form (SAT's
+included), M_GJK_EPA for G and its G-pre kernels, the requested code after step 1.
+
+Inside G, by pair (the predicates in gjk_epa.py): GJK on cores apart tries _face_polish
+(_face_pair), _kink_polish near a crease (_has_crease), Newton's method
+(_gjk_smooth_polish: _hull_polish first for _hull_side) for _gjk_newton_pair; EPA tries
+_cylinders_crossing (two cylinders), _face_polish (_epa_face_pair), _crossing_test
+(_crossing_pair), _kink_polish (_searched_crease) and _epa_polish (_smooth_pair, two
+cylinders, _ellipsoid_box), each minimum kept under _polish_is_global; _witness_by_gjk
+where EPA's witness points leave its face.  A flat core difference through the origin
+(_grow_to_tetra) has core depth 0.  ST_FAILED: GJK's or EPA's cap hit with a wide gap
+(for EPA, when its lower bound does not prove the contact and _caps_fallback's MPR finds
+none), or a non-finite result.
+
+Other methods (step 1 runs first for each):
+  M_GJK_EPA            G on every pair without a plane, G-pre kernels included (no closed
+                       form, no SAT first); a plane: ST_NOT_RUN
+  M_MPR                mpr.mpr_ws on every pair without a plane; a SEPARATED answer inside
+                       the touching band is settled by G (the touching rule; the row keeps
+                       M_MPR); a plane: ST_NOT_RUN
+  M_ANALYTIC           the CF rows above with the same functions (sphere-ellipsoid only
+                       without margin); every other pair, box-box included, ST_NOT_RUN
+  M_ELLIPSOID_EXACT    two spheres or ellipsoids, neither with a margin: the status of
+                       ellipsoid.ellipsoid_exact, distance, normal and witness points from
+                       G (metres); every other pair ST_NOT_RUN
+  M_ELLIPSOID_SAMPLED  likewise with ellipsoid.ellipsoid_sampled at
+                       ELLIPSOID_SAMPLED_SUBDIV subdivisions
 Unknown codes give ST_NOT_RUN.  A row that did not run holds zeros, the normal +z and
 the requested method code.
 """
@@ -228,10 +322,9 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     margin), straight in the world frame: the plane's normal n goes to the world, -n
     into the shape's frame for its support point p, and the signed distance is n . p -
     (d + m), p taken from the plane body's origin.  The same closed form as
-    analytic._plane_any, without the relative pose and the way back from A's frame
-    (measured one thread, 500 pairs of bench/common.pair_cases,
-    contacts mode: sphere-plane 0.068 -> 0.045 us per pair, ellipsoid-plane 0.076 ->
-    0.053, convex-plane 0.086 -> 0.065; results within 7.4e-15 * scale).  A sphere's
+    analytic._plane_any, without the relative pose and the way back from A's frame,
+    which take about a third of such a pair's time (results within 7.4e-15 * scale of
+    analytic._plane_any's).  A sphere's
     support point needs no rotation and a capsule's only its axis (the rotation's third
     column), so those two skip the way into the body frame and back.  Writes ``out``
     (world; normal from A to B: -n when the shape is A, n when it is B; the point on
@@ -293,9 +386,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
 
     Inlined (with analytic.closed_form_ordered and analytic._ordered) into the batch
     loop: a call that passes arrays costs numba a reference-count call per array even
-    on borrowed views, and those calls were half of a closed-form pair's time (measured
-    one thread, process CPU: sphere-sphere 0.19 -> 0.064 us, sphere-box 0.20 -> 0.072
-    us per pair; GJK/EPA pairs unchanged).
+    on borrowed views, and those calls would be half of a closed-form pair's time.
 
     Bounding spheres first: two bounded bodies whose bounding spheres (P_RADIUS about
     the body origins) are apart by more than the cutoff and the touching band end here
@@ -303,11 +394,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     normal along the centre line, pa and pb on the two spheres.  A shape against a
     half-space, by method auto or analytic, is solved in the world frame
     (_half_space_world), and so are a sphere against a shape with a sphere-* closed
-    form (analytic.sphere_world) and two capsules (analytic.capsule_capsule_world): measured one
-    thread, 2,000 pairs of bench/common.pair_cases, contacts mode, alternated with the
-    path through the relative pose (bench/ab_rows.py): sphere-box 0.044 -> 0.021 us per
-    pair, sphere-cylinder 0.049 -> 0.025-0.038, sphere-ellipsoid 0.166 -> 0.144,
-    sphere-sphere 0.029 -> 0.015, capsule-capsule 0.061-0.090 -> 0.041-0.060."""
+    form (analytic.sphere_world) and two capsules (analytic.capsule_capsule_world):
+    for these the relative pose costs as much as the closed form itself."""
     if code_a != PLANE and code_b != PLANE:
         dx, dy, dz = pos_b[0] - pos_a[0], pos_b[1] - pos_a[1], pos_b[2] - pos_a[2]
         dc = math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -371,8 +459,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     elif code_a <= code_b and code_b != PLANE and (method == M_AUTO or method == M_GJK_EPA):
         # no closed form (or none asked for): straight to GJK/EPA, where
         # collide_pair_ws would go after three calls that pass ~80 words of array
-        # structs each (measured: about a quarter of an apart pair's time, 0.33 ->
-        # 0.24 us on cylinder pairs)
+        # structs each (about a quarter of an apart cylinder pair's time)
         st = gjk_epa_ws(sa, sb, verts, r_ab, t_ab, row, ws[2], cutoff)
     elif code_a <= code_b and code_b != PLANE and method == M_MPR:
         st = _mpr(sa, sb, verts, r_ab, t_ab, row, ws, cutoff)
@@ -399,10 +486,8 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
 def _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
                    out, status, lo, hi):
     """Pairs [lo, hi) of ``collide_batch`` with one scratch workspace, in a plain loop:
-    the same loop inside numba's parallel region (the outlined prange body) ran a
-    closed-form pair at twice the cost.  Measured one thread, 5,000 sphere-sphere pairs:
-    0.042 us per pair with the loop in the prange body and a workspace per 128 pairs,
-    0.036 with one workspace, 0.019 with the loop here."""
+    the same loop inside numba's parallel region (the outlined prange body) runs a
+    closed-form pair at twice the cost."""
     # owner-less views: no atomic reference counting on the per-pair path (jit.borrow)
     codes, params, vrange, verts = borrow(codes), borrow(params), borrow(vrange), borrow(verts)
     pairs, pos_w, quat_w = borrow(pairs), borrow(pos_w), borrow(quat_w)
@@ -453,9 +538,8 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cu
     A Python function around the parallel kernel ``_collide_batch``, which is given the
     block count (a kernel asking numba for its thread count cannot be cached).  One
     block runs ``_collide_block`` straight, the same compiled loop without the parallel
-    launch: ~3 us less per call (measured one thread: 6.0 -> 2.7 us for an empty batch,
-    0.043 -> 0.036 us per sphere-sphere pair over 500), which small scenes pay every
-    frame.
+    launch, which costs ~3 us a call (an empty batch takes 2.7 us without it), paid by
+    small scenes every frame.
     """
     nb = n_blocks(pairs.shape[0], NP_CHUNK)
     if nb == 1:

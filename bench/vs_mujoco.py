@@ -16,7 +16,7 @@ runs) while the ratio of the fastest rounds holds within 0.52-0.54.  The fastest
 each peer is its least disturbed one; both get the same treatment.
 
     PYTHONPATH=. .venv/bin/python bench/vs_mujoco.py [ROW ...] [--n 2000] [--rounds 61]
-    ... --cloud shell|blob [--points 1000]     # large hulls, as bench/big_hulls.py
+    ... --cloud shell|blob [--points 1000]     # large hulls, as bench/dev/big_hulls.py
 
 Cases: narrowphase.py's own for the row (the same seed formula, so --n 500 gives its
 cases exactly; larger n adds cases from the same generator).  Ours: method auto,
@@ -102,14 +102,14 @@ def main():
     ap.add_argument("--rounds", type=int, default=61)
     ap.add_argument("--inner", type=int, default=1)
     ap.add_argument("--cloud", choices=("blob", "shell"),
-                    help="convex shapes from --points points as bench/big_hulls.py draws "
+                    help="convex shapes from --points points as bench/dev/big_hulls.py draws "
                          "them, instead of the narrow-phase benchmark's 20-30")
     ap.add_argument("--points", type=int, default=1000)
     args = ap.parse_args()
     numba.set_num_threads(1)
     if args.cloud:
         import bench.common as common
-        from bench.big_hulls import cloud
+        from bench.dev.big_hulls import cloud
         common.random_hull_points = cloud(args.cloud, args.points)
         print(f"(convex shapes: {args.cloud} clouds of {args.points} points)")
     print(f"## contacts / MuJoCo, alternated: {args.n} cases per row, {args.rounds} rounds "

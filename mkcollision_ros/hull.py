@@ -291,7 +291,7 @@ def support_groups(points):
     Why: the support along d is at most c . d + r |d| over a run's ball, so a pass over
     the balls finds the run that holds the maximum and skips every run whose bound is
     below it: ~2 bounds per run and a few runs read, where a pass reads every point
-    (bench/big_hulls.py).  MuJoCo climbs its hull's vertex graph from its last support
+    (bench/dev/big_hulls.py).  MuJoCo climbs its hull's vertex graph from its last support
     vertex instead, which needs state per pair that our support has not got."""
     P = np.ascontiguousarray(points, dtype=np.float64)
     if len(P) <= GROUP_MIN_POINTS:

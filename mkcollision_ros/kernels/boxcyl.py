@@ -46,7 +46,7 @@ apart.  So the first test, f along the line of centres, and the candidates, whic
 hold the box's face normals and the pole as a separating axis test would, end most
 pairs apart with that gap as the distance bound (_apart_out; gjk_epa.gjk_epa_ws takes
 it in contacts mode when it clears the touching band, as cylcyl's planes).  Measured
-(pure Python, bench/deep_pairs.py's 2,000 box-cylinder cases, both orders): 925 of the
+(pure Python, bench/dev/deep_pairs.py's 2,000 box-cylinder cases, both orders): 925 of the
 961 pairs apart end here (of those, GJK would end about half at its first support and
 take 4-8 steps on the rest); no bound lies above GJK's exact distance by more than
 1.1e-13 m, at scales of about 1 m (inside GJK's own tolerance, 1e-12 * scale).

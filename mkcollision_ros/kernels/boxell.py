@@ -50,7 +50,7 @@ The outcomes, each exact:
   4. Else nothing: GJK and EPA (the cores overlapping at an edge's or a vertex's
      minimum, or at a face whose ball the box's sides cut short).
 
-Measured (pure Python on bench/deep_pairs.py's 2,000 ellipsoid-box cases, against its
+Measured (pure Python on bench/dev/deep_pairs.py's 2,000 ellipsoid-box cases, against its
 reference run of GJK and EPA): of the 960 deep pairs, 142 certified by the ball (of the
 390 whose cores overlap at a face minimum) and all 383 whose cores are apart given
 their exact distance (121 over a face, 198 an edge, 64 a vertex), within 8.3e-13 *

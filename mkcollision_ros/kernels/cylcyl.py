@@ -45,7 +45,7 @@ rims are solved in the order of an upper bound on their balls, at most CC_RIMS o
 them, and only the deepest rim point found is tried (one support of A - B): every ball
 is at most the depth, so only the deepest can be certified.
 
-Measured (pure-Python runs of cylinders_depth on bench/deep_pairs.py's 2,000
+Measured (pure-Python runs of cylinders_depth on bench/dev/deep_pairs.py's 2,000
 cylinder-cylinder cases, GJK + EPA the reference): the rims and caps certify 289 of 961
 penetrating pairs (270 of the 939 deeper than 1e-3 * scale: 234 a rim against a side, 36
 against a cap), depths within 6.0e-9 * scale of EPA's (EPA's tolerance: it reports its
@@ -187,7 +187,7 @@ def _cover(radial, s, px, py, pz, big_r, big_h, d1x, d1y, d1z, d2x, d2y, d2z, d3
     being <= 0 as p lies inside that radius; under the cap the point nearest the axis
     whose s x_z is at most H - sqrt(delta^2 - cur^2)), and moves cur to the highest
     level one of them reaches; the levels are covered when cur reaches delta.
-    Measured (bench/deep_pairs.py's 2,000 cylinder-cylinder cases, pure Python): it
+    Measured (bench/dev/deep_pairs.py's 2,000 cylinder-cylinder cases, pure Python): it
     certifies 57 of the 939 deep pairs that no ball does (49 under a side, 8 under a
     cap), 615 certified in all.
     With points sampled densely over the whole cylinder instead of the three segments,
@@ -406,7 +406,7 @@ def _sides_apart(sa, sb, r_ab, t_ab, res):
     m (a rim point; with the axes parallel, the side line's lower end); m . p > R
     proves the cores apart by that much beyond the side's tangent plane (_past_side).
     Returns minus the gap (res written as _apart_out's), or 0.  Measured (pure Python,
-    bench/deep_pairs.py's 2,000 cylinder-cylinder cases): of the 536 pairs apart
+    bench/dev/deep_pairs.py's 2,000 cylinder-cylinder cases): of the 536 pairs apart
     whose bounding spheres overlap (those the batch kernel hands to gjk_epa_ws), the
     caps' and the crossing's planes decide 283, these 183 more; the other 70 go to
     GJK."""
@@ -592,7 +592,7 @@ def segment_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
         top), its gap to the plane then the depth.
     p beyond the side's radius proves the cores apart (the segment misses even the
     unbounded cylinder), as an end past a cap's plane does.  No support of A - B, no
-    Newton steps: ~20 ns.  Measured on bench/deep_pairs.py's 2,000 capsule-cylinder
+    Newton steps: ~20 ns.  Measured on bench/dev/deep_pairs.py's 2,000 capsule-cylinder
     cases (a numpy model of it, GJK + EPA the reference): 314 of the 512 pairs whose
     cores overlap by more than 1e-3 * scale certified (275 by the side, 39 by a cap),
     depths within 4.4e-9 * scale of EPA's, normals within 8.0e-5 rad; the others are
@@ -694,7 +694,7 @@ def ellipsoid_cylinder_depth(sa, sb, r_ab, t_ab, scale, res):
     each step's g at or past R proves the cores apart: on the cases below, 469 of the
     1,442 pairs the caps leave get past the bounds and Newton's first step (all 160
     side certificates among them).
-    Measured on bench/deep_pairs.py's 2,000 ellipsoid-cylinder cases (this function run
+    Measured on bench/dev/deep_pairs.py's 2,000 ellipsoid-cylinder cases (this function run
     with NUMBA_DISABLE_JIT, GJK + EPA the reference): 190 of the 601 pairs whose
     cores overlap by more than 1e-3 * scale certified (159 by the side, 31 by a cap; and
     one pair that overlaps less), depths within 2.5e-13 *
@@ -912,7 +912,7 @@ def hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res):
     certifies.  The side is what a hull's corner or edge pressed into a cylinder takes;
     a cylinder's rim pressed into a hull's face (its normal the face's) is left to GJK
     and EPA, as no hull faces are kept.
-    Measured on bench/deep_pairs.py's 2,000 cylinder-convex cases (this function run
+    Measured on bench/dev/deep_pairs.py's 2,000 cylinder-convex cases (this function run
     with NUMBA_DISABLE_JIT, GJK + EPA the reference): 240 of the 953 pairs whose
     cores overlap by more than 1e-3 * scale certified (183 by a ball, 170 of them by the
     side and 13 by a cap, the rest by _cover; and 17 pairs overlapping less), depths

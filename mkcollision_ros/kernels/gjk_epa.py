@@ -319,7 +319,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     Returns (vertex count, iterations, flag _GJK_APART/_GJK_OVERLAP/_GJK_CAP/_GJK_BOUND/
     _GJK_STALL, the lower bound v.w / |v| for _GJK_BOUND, else 0).
     Inlined into its two callers: as a called function it costs ~0.3 us more per deep
-    pair (bench/deep_pairs.py), more than the call itself (its ~75 words of array
+    pair (bench/dev/deep_pairs.py), more than the call itself (its ~75 words of array
     structs) can explain.  _epa stays a call: inlined, it is hardly faster on cylinders
     and slower on ellipsoids."""
     fs, fv = ws[0], ws[1]
@@ -1406,7 +1406,7 @@ def _epa_face_pair(ca, cb):
     or a cylinder against a sphere or an ellipsoid), or two cylinders.  The face
     test's first-order rise and the basin it proves (_face_basin) hold whatever the
     other shape (they use one point of it, not its smoothness), but against a box or
-    a convex hull the test costs more than it saves (bench/ab_deep.py; against a hull,
+    a convex hull the test costs more than it saves (bench/dev/ab_deep.py; against a hull,
     with its faces tested as well, see _face_basin), and cones are not measured."""
     return _face_pair(ca, cb) or (ca == CYLINDER and cb == CYLINDER)
 
@@ -1973,7 +1973,7 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
     loop, inlined into its callers, stays lean: with the hull's branch written into
     it, deep pairs of rows that never take the branch take 4-7% more time
     (capsule-cylinder, cylinder-cylinder, cylinder-convex, box-cylinder,
-    sphere-convex; bench/ab_deep.py, identical results)."""
+    sphere-convex; bench/dev/ab_deep.py, identical results)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     side = _hull_side(sa[0], sb[0])
@@ -2728,8 +2728,8 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     touching rule's status; a FAILED pair that
     MPR finds in contact keeps the smaller bound with that status.  ``out`` (A's
     frame, method M_GJK_EPA; iterations: MPR's supports added) and the returned status
-    stay as they were, iterations too, when neither applies.  Scratch: the EPA vertex rows and face offsets of ``ws``, free once EPA
-    has ended (and unused after GJK)."""
+    stay as they were, iterations too, when neither applies.  Scratch: the EPA vertex
+    rows and face offsets of ``ws``, free once EPA has ended (and unused after GJK)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws, out = borrow_gjk_workspace(ws), borrow(out)
     tmp = ws[1][_FD:_FD + OUT_SIZE]

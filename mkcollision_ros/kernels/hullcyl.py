@@ -63,7 +63,7 @@ res = [U, n, pa, pb] as hullell's, the witnesses exact for the feature pair foun
 rim point and the point U back along n; a vertex and the side's point level with it;
 an edge's point on the side's line; a cap's point over B's lowest vertex).
 
-Measured (pure Python, the first 300 of bench/deep_pairs.py's cylinder-convex cases,
+Measured (pure Python, the first 300 of bench/dev/deep_pairs.py's cylinder-convex cases,
 overlap given where GJK/EPA found it): every overlapping pair decided, depths within
 7.7e-9 * scale and normals within 1.5e-4 rad of GJK/EPA's (EPA's own tolerance).  On
 the row's deep pairs, per pair: ~43 faces, ~64 edges of which ~1.6 pass the chord bound

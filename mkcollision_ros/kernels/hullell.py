@@ -50,7 +50,7 @@ faces'):
 
 The pruning skips the negative feet of vertices outside E, so it holds only if E and B
 overlap.  The kernel proves that first where it is cheap: a hull vertex inside E or E's
-centre inside B (85% of the deep pairs of bench/deep_pairs.py's cases); else by GJK in
+centre inside B (85% of the deep pairs of bench/dev/deep_pairs.py's cases); else by GJK in
 E's unit-ball frame (E scaled to the unit ball by its inverse semi-axes, an affine map:
 the hull's image is a hull, so GJK there is a point against a polytope, on the
 vertices already in E's frame, with no square root per support).  That GJK decides the
@@ -71,7 +71,7 @@ decides nothing.
 The answer is for E's core, which is E shrunk by its rolling radius (geometry.py), and
 B's core, the hull of its points: res = [U - r, n, pa, pb] as boxell's.
 
-Measured on bench/deep_pairs.py's 1,016 deep ellipsoid-convex pairs: every pair
+Measured on bench/dev/deep_pairs.py's 1,016 deep ellipsoid-convex pairs: every pair
 decided, the depth within 9.5e-9 * scale and the normal within 4e-4 rad of GJK/EPA's
 (EPA's own tolerance).  Figures of time: BENCHMARKS.md.
 """

@@ -528,8 +528,8 @@ def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cu
                              A pair farther apart may be reported SEPARATED with a
                              certified lower bound (> cutoff) as its distance, the
                              separating direction as normal and witness points that are
-                             not the closest (gjk_epa.gjk_epa_ws); the pipeline passes 0,
-                             as it keeps touching pairs only.
+                             not the closest (gjk_epa.gjk_epa_ws); the pipeline passes
+                             its reach, max(contact_margin, proximity), query_contacts 0.
     out    float64 (P, OUT_SIZE)  written: signed distance, normal A -> B, pa, pb (world)
     status int64 (P,)        written: status codes (constants.ST_*)
     Pairs run in contiguous blocks, one per numba thread (none smaller than NP_CHUNK),

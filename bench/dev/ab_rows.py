@@ -2,7 +2,7 @@
 of two checkouts on the closed-form rows, whose times bench/narrowphase.py rounds to
 0.01 us.
 
-    PYTHONPATH=. .venv/bin/python bench/ab_rows.py sphere-box sphere-cylinder ...
+    PYTHONPATH=. .venv/bin/python bench/dev/ab_rows.py sphere-box sphere-cylinder ...
 
 Each row: bench.common.pair_cases(a, b, 2000, seed=0), then the fastest of three
 medians of 9 timed runs of the batch kernel (method auto, cutoff 0, one thread).
@@ -12,7 +12,7 @@ import sys
 
 import numba
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 from bench.common import pair_cases  # noqa: E402
 from bench.narrowphase import run_ours  # noqa: E402

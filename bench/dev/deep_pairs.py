@@ -9,8 +9,8 @@ through ``gjk_epa_ws`` / ``mpr_ws`` with borrowed arrays, as the batch kernel ca
 them (owned arrays there cost ~1.3 us more per deep pair in reference counting), and a
 later run compares depth, normal and status with the reference.
 
-    PYTHONPATH=. .venv/bin/python bench/deep_pairs.py --save [ROW ...]   # reference
-    PYTHONPATH=. .venv/bin/python bench/deep_pairs.py [ROW ...]          # compare
+    PYTHONPATH=. .venv/bin/python bench/dev/deep_pairs.py --save [ROW ...]   # reference
+    PYTHONPATH=. .venv/bin/python bench/dev/deep_pairs.py [ROW ...]          # compare
     ... [--mpr] [--cases DIR]                                            # MPR instead
     ... --apart      # the apart pairs whose bounding spheres overlap, not the deep ones
 
@@ -18,9 +18,9 @@ Profile (numba keeps the object code only of what it compiles in the process, so
 kernel cache must start empty; ``perf`` is a system tool, not a dependency):
 
     XDG_CACHE_HOME=$(mktemp -d) PYTHONPATH=. perf record -o /tmp/perf.data \\
-        .venv/bin/python bench/deep_pairs.py --profile 8 cylinder-cylinder
+        .venv/bin/python bench/dev/deep_pairs.py --profile 8 cylinder-cylinder
     perf script -i /tmp/perf.data -F ip > /tmp/ips.txt
-    PYTHONPATH=. .venv/bin/python bench/deep_pairs.py --report /tmp/ips.txt
+    PYTHONPATH=. .venv/bin/python bench/dev/deep_pairs.py --report /tmp/ips.txt
 
 ``--profile S`` loops the timed call for S seconds and writes the map of every compiled
 function (address, object file, offset, symbol) next to the cases; ``--report`` counts
@@ -39,7 +39,7 @@ import time
 import numba
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 from bench.common import KINDS, pair_cases, relative_poses  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402

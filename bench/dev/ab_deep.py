@@ -2,14 +2,14 @@
 time per pair on the same seeded cases, timed in alternation.
 
 Why: on this machine (a virtual machine) the time of one row drifts by 10-30% from one
-minute to the next, so bench/deep_pairs.py runs minutes apart do not resolve a change
+minute to the next, so bench/dev/deep_pairs.py runs minutes apart do not resolve a change
 of a few percent.  Here the revision's kernels are imported beside ours (its
 ``mkcollision_ros/kernels`` exported with ``git archive`` under another package name;
 the kernels import nothing but each other, numpy, numba and math) and both are timed
 round after round on the same pairs, as the batch kernel calls them (``gjk_epa_ws``,
 borrowed arrays, one workspace, ``--cutoff`` 0 as in contacts mode).
 
-    PYTHONPATH=. .venv/bin/python bench/ab_deep.py REV [ROW ...] [--n 2000] [--rounds 7]
+    PYTHONPATH=. .venv/bin/python bench/dev/ab_deep.py REV [ROW ...] [--n 2000] [--rounds 7]
     ... --subset all|deep|apart     # which pairs are timed (default deep)
     ... --no-time --n 100000        # results only, on many pairs
     ... --check-n 100000            # also results only on that many other cases per
@@ -41,7 +41,7 @@ import time
 import numba
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, ROOT)
 
 from bench.common import KINDS, pair_cases, relative_poses  # noqa: E402

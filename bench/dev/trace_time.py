@@ -3,7 +3,7 @@
 (compiled kernels): the fastest and the median of --repeat calls, and what the trace
 holds.
 
-    PYTHONPATH=. .venv/bin/python bench/trace_time.py [--repeat 50]
+    PYTHONPATH=. .venv/bin/python bench/dev/trace_time.py [--repeat 50]
 """
 import argparse
 import os
@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 from mkcollision_ros import collide  # noqa: E402
 from mkcollision_ros.trace import minkowski_difference, trace_pair  # noqa: E402

@@ -3,7 +3,7 @@ on its own, our contacts mode (auto, cutoff 0, one thread) alternated with MuJoC
 collision pass (defaults) as bench/vs_mujoco.py does (the ratio of each peer's fastest
 round; figures of runs timed back to back wandered by 2x on this machine).
 
-    PYTHONPATH=. .venv/bin/python bench/regimes.py [ROW ...] [--n 2000] [--rounds 41]
+    PYTHONPATH=. .venv/bin/python bench/dev/regimes.py [ROW ...] [--n 2000] [--rounds 41]
 
 Regimes: apart with bounding spheres apart (both sides' pre-test ends them), apart
 with bounding spheres overlapping (the narrow phase proves them apart), touching or
@@ -18,7 +18,7 @@ import sys
 import numba
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 from bench.common import pair_cases  # noqa: E402
 from bench.narrowphase import run_ours  # noqa: E402

@@ -3,17 +3,17 @@
 Times on this machine wander in spells; the number of support points a pair takes does
 not, and an idea that saves none saves no time.  This counts the calls of
 ``gjk_epa.minkowski_core_xyz`` (every GJK, EPA and polish step makes one) for each deep
-pair (depth > 1e-3 * scale in bench/deep_pairs.py's reference run) through ``gjk_epa_ws``
+pair (depth > 1e-3 * scale in bench/dev/deep_pairs.py's reference run) through ``gjk_epa_ws``
 in contacts mode, split by whether EPA ran (the cores overlap) or not (GJK alone on cores
 apart, or a closed-form shortcut such as cylcyl's, which calls no support of A - B and
 counts 0), and for a pair with a box by the box's feature along the answer's normal
 (face, edge or vertex: how many of its axes are normal to it).  It also prints the
 answer's largest departure from the reference depth.  Run it with numba off:
 
-    NUMBA_DISABLE_JIT=1 PYTHONPATH=. .venv/bin/python bench/support_counts.py ROW [--n N]
+    NUMBA_DISABLE_JIT=1 PYTHONPATH=. .venv/bin/python bench/dev/support_counts.py ROW [--n N]
 
 An edit to test goes into the kernels first (numba off, so no compile): the counts then
-show the edit's effect in seconds on the same cases (bench/deep_pairs.py --save ROW
+show the edit's effect in seconds on the same cases (bench/dev/deep_pairs.py --save ROW
 writes them and the reference).
 """
 import argparse
@@ -23,10 +23,10 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 from bench.common import relative_poses  # noqa: E402
-from bench.deep_pairs import load_cases  # noqa: E402
+from bench.dev.deep_pairs import load_cases  # noqa: E402
 from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
 from mkcollision_ros.kernels.constants import BOX, OUT_SIZE  # noqa: E402
 

@@ -9,7 +9,7 @@ its offset in the object gives the load base, and each sample's address minus th
 falls in one function of the object (inlined helpers count as their caller).  Needs
 ``perf`` (linux-tools) and a kernel that lets a user record (perf_event_paranoid <= 2).
 
-    PYTHONPATH=. .venv/bin/python bench/perf_kernels.py cylinder-cylinder [--seconds 20]
+    PYTHONPATH=. .venv/bin/python bench/dev/perf_kernels.py cylinder-cylinder [--seconds 20]
         [--subset all|epa] [--n 2000] [--calls]
 
 ``--subset epa``: only the pairs that reach GJK (iterations > 1).  ``--calls``: also
@@ -27,7 +27,7 @@ import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 CHILD = r"""
 import sys, time

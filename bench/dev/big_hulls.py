@@ -2,7 +2,7 @@
 (mkcollision_ros.hull) saves, against the same table with every point kept, and
 against MuJoCo (which builds its own hull of the same points), one thread.
 
-    PYTHONPATH=. .venv/bin/python bench/big_hulls.py [--n 500] [--points 1000]
+    PYTHONPATH=. .venv/bin/python bench/dev/big_hulls.py [--n 500] [--points 1000]
 
 Cases: bench.common.pair_cases with the convex shape's points drawn from one of two
 clouds of --points points about the origin, the bounding size of the narrow-phase
@@ -21,7 +21,7 @@ import sys
 import numba
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 import bench.common as common  # noqa: E402
 from bench.narrowphase import run_mujoco, run_ours  # noqa: E402

@@ -18,6 +18,7 @@ import platform
 import re
 import subprocess
 import sys
+import textwrap
 import time
 from dataclasses import dataclass
 from importlib import metadata
@@ -80,8 +81,11 @@ SECTIONS = (
         "`contacts` message against that stamp; the bench scene at 0.2 touching pairs "
         "per body, every body moving.  The three processes share the two cores.  "
         "\"published\" counts from the first message the node answered (the ones "
-        "before are lost to discovery).  Goal: 1,000 bodies at 100 Hz with every "
-        "message answered and p99 under 3 ms."),
+        "before are lost to discovery).  The node runs numba's OpenMP threads with "
+        "`OMP_WAIT_POLICY=PASSIVE` (node.py): spinning threads would take a core from the "
+        "other two processes.  The Python publisher builds each PoseArray message on the "
+        "same two cores; the node reads it from its CDR bytes.  Goal: 1,000 bodies at "
+        "100 Hz with every message answered and p99 under 3 ms."),
     Section(
         "rerun", "Rerun logging",
         ("bench/rerun_cost.py", "--steps", "300"),
@@ -90,6 +94,14 @@ SECTIONS = (
         "in the logger's child process, so what a step waits for is the pickling and "
         "the hand-over; the child's CPU per step is beside it.  Goal: under 1 ms a step "
         "added to the node at 1,000 bodies."),
+    Section(
+        "rerun_memory", "Rerun logging: memory over time",
+        ("bench/rerun_cost.py", "--memory-seconds", "120"),
+        "1,000 bodies paced at 100 Hz, logged for two minutes to each sink in turn (a "
+        "file, then serving with a 256 MiB buffer and no viewer); the resident memory of "
+        "the bench process and its logger's child together, every 10 s.  The file is written "
+        "without rerun's footer, whose index of every chunk rerun keeps in memory until "
+        "the file closes."),
     Section(
         "fuzz", "Fuzzer: 10^6 random pairs per method",
         ("bench/fuzz.py", "--pairs", "1000000", "--seed", "1", "--api-every", "1000"),
@@ -102,9 +114,20 @@ SECTIONS = (
         "\"other failures\" are pairs failing a check other than FAILED, NaN or a "
         "disagreement.  A call over the 50 ms bound is timed again and counts only if "
         "it is slow again.  Goal: no FAILED, no NaN, no failure, no disagreement.  A "
-        "failure prints a one-line repro, which becomes a case in tests/fuzz_cases.json."),
+        "failure prints a one-line repro, which becomes a case in tests/fuzz_cases.json "
+        "(run by tests/test_fuzz.py with the slow oracle of tests/oracles.py beside it).  "
+        "Beyond the checks: where GJK stalls (a needle-thin Minkowski difference: a long "
+        "capsule core or a cone against a tiny body at its centre) and MPR finds "
+        "contact, the depth is the smaller of h along MPR's and GJK's normals "
+        "(gjk_epa._caps_fallback), an upper bound with the right status; the saved "
+        "cases marked 'upper_bound' hold it to the oracle."),
 )
 BY_NAME = {s.name: s for s in SECTIONS}
+INTRO = ("Written by `bench/report.py` from the outputs in `bench/results/`: each table is "
+         "what the command above it printed, on this machine, with nothing else running.  "
+         "Run `python bench/report.py NAME` to measure one again, `python bench/report.py` "
+         "for all (after `. tools/env.sh`).  Which script answers which question: "
+         "`bench/README.md`.")
 
 
 def command_line(s):
@@ -156,19 +179,12 @@ def _demote(text):
 
 
 def render():
-    parts = [
-        "# Benchmarks\n",
-        "Written by `bench/report.py` from the outputs in `bench/results/`: each table is "
-        "what the command above it printed, on this machine, with nothing else running.  "
-        "Run `python bench/report.py NAME` to measure one again, `python bench/report.py` "
-        "for all (after `. tools/env.sh`).  Which script answers which question: "
-        "`bench/README.md`.\n",
-        "## Machine\n", machine() + "\n",
-    ]
+    parts = ["# Benchmarks\n", textwrap.fill(INTRO, 88) + "\n", "## Machine\n",
+             machine() + "\n"]
     for s in SECTIONS:
         path = os.path.join(RESULTS, s.name + ".md")
         parts.append(f"## {s.title}\n")
-        parts.append(s.about + "\n")
+        parts.append(textwrap.fill(s.about, 88) + "\n")
         parts.append(f"    . tools/env.sh && {command_line(s)}\n")
         if os.path.exists(path):
             with open(path, encoding="utf-8") as f:

@@ -16,40 +16,37 @@ import math
 
 import numpy as np
 
+from mkcollision_ros import rotations
+
 TYPES = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex")
 
 
 # --- random inputs -------------------------------------------------------------------------
 def random_quats(rng, n):
     """(n, 4) unit quaternions xyzw, uniform on SO(3)."""
-    q = rng.normal(size=(n, 4))
-    return q / np.linalg.norm(q, axis=1, keepdims=True)
+    return rotations.random_quat(rng, n)
+
+
+def random_rotation(rng):
+    """One rotation matrix (3, 3), uniform on SO(3) (four normal draws)."""
+    q = rng.normal(size=4)
+    return rotations.quat_to_matrix(q / np.linalg.norm(q))
 
 
 def quat_matrix(q):
-    """Rotation matrix of one xyzw quaternion."""
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    """Rotation matrix of one xyzw quaternion (normalised here)."""
+    q = np.asarray(q, np.float64)
+    return rotations.quat_to_matrix(q / np.linalg.norm(q))
 
 
 def quat_axis(axis, angle):
     """The xyzw quaternion of a turn by ``angle`` (rad) about ``axis``."""
-    axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    return np.concatenate([axis * math.sin(angle / 2), [math.cos(angle / 2)]])
+    return rotations.quat_axis_angle(axis, angle)
 
 
 def quat_mul(a, b):
     """The product a * b of two xyzw quaternions (b applied first)."""
-    x1, y1, z1, w1 = a
-    x2, y2, z2, w2 = b
-    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
+    return rotations.quat_mul(a, b)
 
 
 def random_shape(rng, kind, size=1.0, ratio=4.0):
@@ -101,12 +98,33 @@ def coal_shape(shape):
         m.addVertices(pts)
         m.endModel()
         m.buildConvexHull(False, "Qt")
+        _HULL_MODELS.append(m)      # the hull belongs to its model: keep the model alive
+        del _HULL_MODELS[:-8]
         g = m.convex
+    elif kind == "plane":
+        g = coal.Halfspace(np.asarray(shape["normal"], float), float(shape["offset"]))
     else:
         raise ValueError(kind)
     if shape.get("margin", 0.0):
         g.setSweptSphereRadius(float(shape["margin"]))
     return g
+
+
+_HULL_MODELS = []
+
+
+def coal_dist(shape_a, shape_b, r, t):
+    """coal.distance of A at the origin and B at rotation ``r`` (3, 3), translation
+    ``t`` (3,) in A's frame, GJK tolerance 1e-12: the signed distance (m)."""
+    import coal
+    tf = coal.Transform3s()
+    tf.setRotation(r)
+    tf.setTranslation(t)
+    req = coal.DistanceRequest()
+    req.gjk_tolerance = 1e-12
+    res = coal.DistanceResult()
+    return coal.distance(coal_shape(shape_a), coal.Transform3s(), coal_shape(shape_b), tf,
+                         req, res)
 
 
 def coal_transform(pose):

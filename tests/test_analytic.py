@@ -4,10 +4,11 @@ sign-convention invariants.  Seeded; no timings."""
 
 import math
 
-import coal
 import numpy as np
 import pytest
 
+import oracles as O
+from mkcollision_ros import rotations
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.analytic import collide_analytic
 from mkcollision_ros.kernels.geometry import support_full
@@ -19,48 +20,6 @@ VERTS0 = np.zeros((0, 3))
 def tup(shape, voff=0):
     code, prm, v = shape_row(shape)
     return (np.int64(code), prm, np.int64(voff), np.int64(point_count(code, prm, v))), v
-
-
-def rot(rng):
-    q = rng.normal(size=4)
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def coal_shape(s):
-    t = s["type"]
-    if t == "sphere":
-        g = coal.Sphere(s["radius"])
-    elif t == "box":
-        g = coal.Box(*s["size"])
-    elif t == "capsule":
-        g = coal.Capsule(s["radius"], s["length"])
-    elif t == "ellipsoid":
-        g = coal.Ellipsoid(*s["radii"])
-    elif t == "cylinder":
-        g = coal.Cylinder(s["radius"], s["height"])
-    elif t == "cone":
-        g = coal.Cone(s["radius"], s["height"])
-    elif t == "plane":
-        g = coal.Halfspace(np.asarray(s["normal"], float), float(s["offset"]))
-    else:
-        raise ValueError(t)
-    if s.get("margin", 0.0):
-        g.setSweptSphereRadius(s["margin"])
-    return g
-
-
-def coal_dist(sa, sb, r, t):
-    tf = coal.Transform3s()
-    tf.setRotation(r)
-    tf.setTranslation(t)
-    req = coal.DistanceRequest()
-    req.gjk_tolerance = 1e-12
-    res = coal.DistanceResult()
-    return coal.distance(coal_shape(sa), coal.Transform3s(), coal_shape(sb), tf, req, res)
 
 
 def sdf(shape, p):
@@ -227,12 +186,12 @@ def test_random_pairs_against_coal_and_invariants(ka, kb):
         sa, _ = tup(sa_d)
         sb, _ = tup(sb_d)
         scale = sa[1][7] + sb[1][7]
-        r = rot(rng)
+        r = O.random_rotation(rng)
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
         t = u * rng.uniform(0.5, 1.5) * contact_offset(sa, sb, r, u)
         st, out = run(sa_d, sb_d, r, t)
-        cd = coal_dist(sa_d, sb_d, r, t)
+        cd = O.coal_dist(sa_d, sb_d, r, t)
         assert out[C.OUT_DIST] == pytest.approx(cd, abs=1e-8 * scale), (sa_d, sb_d, r, t)
         hits += st != C.ST_SEPARATED
         check_invariants(sa_d, sb_d, r, t, st, out, scale)
@@ -258,7 +217,7 @@ def test_plane_against_every_shape(kind):
         else:
             shape = rand_shape(rng, kind)
         sa, verts = tup(shape)
-        r = rot(rng)
+        r = O.random_rotation(rng)
         t = rng.normal(size=3) * 1.5
         # choose the offset so the signed distance is uniform in +-0.5 * A's radius
         x = np.empty(3)
@@ -274,7 +233,7 @@ def test_plane_against_every_shape(kind):
             x_b = (verts[:sa[3]] - t) @ r    # rows: r^T (v - t), the points only
             ref = (x_b @ nrm).min() - shape.get("margin", 0.0) - plane["offset"]
         else:
-            ref = coal_dist(shape, plane, r, t)
+            ref = O.coal_dist(shape, plane, r, t)
         assert out[C.OUT_DIST] == pytest.approx(ref, abs=1e-9 * max(scale, 1.0))
         d = out[C.OUT_DIST]
         nv = out[1:4]
@@ -372,7 +331,7 @@ def test_sphere_cylinder_closed_form_against_sdf_and_gjk_epa():
         sa, _ = tup(sa_d)
         sb, _ = tup(sb_d)
         scale = sa[1][7] + sb[1][7]
-        r = rot(rng)
+        r = O.random_rotation(rng)
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
         # mixture: some centres deep inside the cylinder, some near touching, some apart
@@ -434,7 +393,6 @@ def _check_closed_form(sa_d, sb_d, r, t):
     distance certified by the support function along the normal, swapping A and B), and
     return its status."""
     from mkcollision_ros import collide
-    import oracles as O
     sa, _ = tup(sa_d)
     sb, _ = tup(sb_d)
     scale = sa[1][7] + sb[1][7]
@@ -449,7 +407,7 @@ def _check_closed_form(sa_d, sb_d, r, t):
     np.testing.assert_allclose(pb - pa, d * nrm, atol=1e-12 * scale)
     # the same pair in world poses: A at the origin (identity), B at (t, r)
     pose_a = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
-    pose_b = (list(t), list(np.roll(_quat_wxyz(r), -1)))
+    pose_b = (list(t), list(rotations.matrix_to_quat(r)))
     assert abs(O.surface_gap(sa_d, pose_a, pa, nrm)) < 1e-9 * scale
     assert abs(O.surface_gap(sb_d, pose_b, pb, -nrm)) < 1e-9 * scale
     h = O.cso_support(sa_d, pose_a, sb_d, pose_b, nrm[None, :])[0]
@@ -465,7 +423,6 @@ def test_sphere_cone_closed_form_against_gjk_epa():
     """sphere-cone closed form (meridian-plane triangle) against GJK/EPA and the
     invariants: witness points on the surfaces, pb - pa = distance * normal, the depth
     certified by the support function along the normal."""
-    import oracles as O
     rng = np.random.default_rng(78)
     n, hits = 300, 0
     for k in range(n):
@@ -485,31 +442,12 @@ def test_sphere_cone_closed_form_against_gjk_epa():
     assert 0.3 * n <= hits <= 0.8 * n
 
 
-def _quat_wxyz(r):
-    """Unit quaternion (w, x, y, z) of a rotation matrix (Shepperd's method)."""
-    tr = np.trace(r)
-    if tr > 0:
-        s = 2.0 * math.sqrt(1.0 + tr)
-        return np.array([0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s,
-                         (r[1, 0] - r[0, 1]) / s])
-    i = int(np.argmax(np.diag(r)))
-    j, k = (i + 1) % 3, (i + 2) % 3
-    s = 2.0 * math.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k])
-    q = np.empty(4)
-    q[0] = (r[k, j] - r[j, k]) / s
-    q[1 + i] = 0.25 * s
-    q[1 + j] = (r[j, i] + r[i, j]) / s
-    q[1 + k] = (r[k, i] + r[i, k]) / s
-    return q
-
-
 def test_sphere_ellipsoid_closed_form_against_gjk_epa():
     """sphere-ellipsoid closed form (Newton on the Lagrange multiplier) against GJK/EPA and
     the invariants, including the special points: the centre inside on the plane of the
     shortest axis (the flat case), coincident centres, spheroids with tied shortest
     axes, flat and needle ellipsoids; an ellipsoid with a margin is not an ellipsoid
     and is left to GJK/EPA."""
-    import oracles as O
     rng = np.random.default_rng(79)
     n, hits, flat_cases = 400, 0, 0
     for k in range(n):
@@ -547,7 +485,6 @@ def _world_against_body_frame(shapes, pos, quat, normal_atol, point_tol):
     fed each pair's relative pose: the same status and method, the distance within
     1e-12 * scale, the world normal within ``normal_atol`` and the world witness points
     within ``point_tol`` * (scale + |A's position|).  Returns the statuses."""
-    import oracles as O
     from mkcollision_ros.kernels.narrowphase import collide_batch
     from mkcollision_ros.shapes import build_table
     table = build_table(shapes)
@@ -576,7 +513,6 @@ def _world_against_body_frame(shapes, pos, quat, normal_atol, point_tol):
 def _paired_poses(rng, n, spread):
     """World poses of n pairs (2k, 2k + 1): random orientations, the first body near the
     origin or 1e3 m from it, the second ``spread`` * a normal draw away from it."""
-    import oracles as O
     quat = O.random_quats(rng, 2 * n)
     pos = np.zeros((2 * n, 3))
     pos[0::2] = rng.choice([0.0, 1e3], size=(n, 1)) + rng.normal(size=(n, 3))
@@ -679,7 +615,6 @@ def test_capsules_whose_axes_meet_in_a_line_or_a_point_separate_across_them(la, 
     other's segment: every direction normal to the segment is as deep, so the normal
     is normal to it and the depth is the sum of the radii, in either order, for both
     the world-frame path and the body frame."""
-    import oracles as O
     from mkcollision_ros import collide
     rng = np.random.default_rng(61)
     a = {"type": "capsule", "radius": 0.3, "length": la}

@@ -6,6 +6,7 @@ from mkcollision_ros.kernels.broadphase import find_pairs, world_aabbs
 from mkcollision_ros.kernels.constants import PLANE
 from mkcollision_ros.kernels.geometry import quat_to_matrix
 from mkcollision_ros.shapes import build_table
+from oracles import random_quats
 
 
 def random_shapes(rng, n, plane_every=0):
@@ -30,11 +31,6 @@ def random_shapes(rng, n, plane_every=0):
         else:
             out.append({"type": "ellipsoid", "radii": list(rng.uniform(0.05, 0.4, 3))})
     return out
-
-
-def random_quats(rng, n):
-    q = rng.normal(size=(n, 4))
-    return q / np.linalg.norm(q, axis=1)[:, None]
 
 
 def aabbs(table, pos, quat, grow=0.0):

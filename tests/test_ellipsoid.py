@@ -13,20 +13,13 @@ import coal
 import numpy as np
 import pytest
 
+import oracles as O
+
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
 
 VERTS0 = np.zeros((0, 3))
-
-
-def rot(rng):
-    q = rng.normal(size=4)
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def ell(radii, margin=0.0):
@@ -99,7 +92,7 @@ def random_pair(rng, regime, family="plain", size=1.0, far=False):
     fa = family if rng.random() < 0.7 else "plain"
     sa = ell(random_radii(rng, fa, size))
     sb = ell(random_radii(rng, family, size * 10 ** rng.uniform(-0.5, 0.5)))
-    r = rot(rng)
+    r = O.random_rotation(rng)
     u = rng.normal(size=3)
     u /= np.linalg.norm(u)
     lo, hi = REGIMES[regime]
@@ -107,7 +100,7 @@ def random_pair(rng, regime, family="plain", size=1.0, far=False):
     if far:
         # both bodies 1e5 m from the world origin: recompute the relative pose from
         # world poses as the pipeline does (it loses the low bits of t)
-        r_a = rot(rng)
+        r_a = O.random_rotation(rng)
         p_a = rng.normal(size=3) / np.sqrt(3) * 1e5
         r_b = r_a @ r
         p_b = p_a + r_a @ t
@@ -128,7 +121,6 @@ def test_exact_agrees_with_coal_and_gjk(family, size, far):
     n_each = 110
     totals = {}
     for regime in REGIMES:
-        agree = 0
         hits = 0
         counted = 0
         for _ in range(n_each):
@@ -172,7 +164,7 @@ def test_sphere_pair_gap_closed_form():
         d = rng.uniform(0.0, 2.0) * (ra + rb)
         u = rng.normal(size=3)
         u /= np.linalg.norm(u)
-        st, out = exact(sph(ra), sph(rb), rot(rng), u * d)
+        st, out = exact(sph(ra), sph(rb), O.random_rotation(rng), u * d)
         if d > rb:     # origin outside E (B's ball of radius rb / ra in the T frame)
             assert out[0] == pytest.approx((d - ra - rb) / ra, abs=1e-12 * (1 + rb / ra))
             np.testing.assert_allclose(out[1:4], u, atol=1e-9)

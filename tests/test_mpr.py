@@ -8,9 +8,10 @@ docs/narrowphase-notes.md:   PYTHONPATH=. python tests/test_mpr.py
 """
 import sys
 
-import coal
 import numpy as np
 import pytest
+
+import oracles as O
 
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.analytic import collide_analytic
@@ -20,15 +21,6 @@ from mkcollision_ros.kernels.mpr import mpr
 from mkcollision_ros.shapes import point_count, shape_row
 
 KINDS = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex")
-
-
-def rot(rng):
-    q = rng.normal(size=4)
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def rand_shape(rng, kind, size=1.0, margin_p=0.3):
@@ -68,45 +60,6 @@ def pack(sa_d, sb_d):
 _KEEP = []
 
 
-def coal_shape(s):
-    t = s["type"]
-    if t == "sphere":
-        g = coal.Sphere(s["radius"])
-    elif t == "box":
-        g = coal.Box(*s["size"])
-    elif t == "capsule":
-        g = coal.Capsule(s["radius"], s["length"])
-    elif t == "ellipsoid":
-        g = coal.Ellipsoid(*s["radii"])
-    elif t == "cylinder":
-        g = coal.Cylinder(s["radius"], s["height"])
-    elif t == "cone":
-        g = coal.Cone(s["radius"], s["height"])
-    else:
-        m = coal.BVHModelOBBRSS()
-        pts = np.asarray(s["points"], dtype=np.float64)
-        m.beginModel(0, len(pts))
-        m.addVertices(pts)
-        m.endModel()
-        m.buildConvexHull(False, "Qt")
-        _KEEP.append(m)      # the hull belongs to the model: keep it alive
-        del _KEEP[:-4]
-        g = m.convex
-    if s.get("margin", 0.0):
-        g.setSweptSphereRadius(s["margin"])
-    return g
-
-
-def coal_dist(sa_d, sb_d, r, t):
-    tf = coal.Transform3s()
-    tf.setRotation(r)
-    tf.setTranslation(t)
-    req = coal.DistanceRequest()
-    req.gjk_tolerance = 1e-12
-    res = coal.DistanceResult()
-    return coal.distance(coal_shape(sa_d), coal.Transform3s(), coal_shape(sb_d), tf, req, res)
-
-
 def contact_offset(sa, sb, verts, r, u):
     """h_A(u) + h_B(-u) (m): beyond this offset along the unit u the pair is apart."""
     wa, wb, w = np.empty(3), np.empty(3), np.empty(3)
@@ -125,7 +78,7 @@ def random_case(rng, ka, kb, lo=0.3, hi=1.3):
     sa_d = rand_shape(rng, ka)
     sb_d = rand_shape(rng, kb)
     sa, sb, verts = pack(sa_d, sb_d)
-    r = rot(rng)
+    r = O.random_rotation(rng)
     u = rng.normal(size=3)
     u /= np.linalg.norm(u)
     t = u * rng.uniform(lo, hi) * contact_offset(sa, sb, verts, r, u)
@@ -153,7 +106,7 @@ def test_boolean_agrees_with_coal_and_output_is_valid():
         nv = out[1:4]
         assert abs(np.linalg.norm(nv) - 1.0) < 1e-12
         np.testing.assert_allclose(out[7:10] - out[4:7], out[0] * nv, atol=1e-11 * scale)
-        cd = coal_dist(sa_d, sb_d, r, t)
+        cd = O.coal_dist(sa_d, sb_d, r, t)
         if st == C.ST_SEPARATED:
             # a lower bound of the distance, and the normal separates: h_D(n) < 0
             assert 0.0 <= out[0] <= cd + 1e-9 * scale
@@ -187,7 +140,7 @@ def test_depth_over_estimates_the_exact_depth(ka, kb):
         st, out = run(sa, sb, verts, r, t)
         scale = sa[1][7] + sb[1][7]
         if (ka, kb) == ("box", "box"):
-            exact = coal_dist(sa_d, sb_d, r, t)
+            exact = O.coal_dist(sa_d, sb_d, r, t)
         else:
             ref = np.empty(C.OUT_SIZE)
             collide_analytic(sa, sb, verts, r, t, ref)
@@ -249,9 +202,9 @@ def test_moving_b_by_depth_stops_penetration():
         t2 = t - out[0] * out[1:4]
         # the origin lands on a supporting plane of D: not penetrating any more (it
         # touches only if the origin's projection falls inside the final portal)
-        assert coal_dist(sa_d, sb_d, r, t2) >= -1e-7 * scale
+        assert O.coal_dist(sa_d, sb_d, r, t2) >= -1e-7 * scale
         t3 = t2 + 1e-6 * scale * out[1:4]
-        assert coal_dist(sa_d, sb_d, r, t3) > 0.0
+        assert O.coal_dist(sa_d, sb_d, r, t3) > 0.0
         assert run(sa, sb, verts, r, t3)[0] == C.ST_SEPARATED
 
 
@@ -269,13 +222,13 @@ def test_coincident_centres_and_huge_and_tiny_scales():
             sa_d = rand_shape(rng, ka, size)
             sb_d = rand_shape(rng, kb, size)
             sa, sb, verts = pack(sa_d, sb_d)
-            r = rot(rng)
+            r = O.random_rotation(rng)
             u = rng.normal(size=3)
             u /= np.linalg.norm(u)
             t = u * rng.uniform(0.3, 1.3) * contact_offset(sa, sb, verts, r, u)
             st, out = run(sa, sb, verts, r, t)
             scale = sa[1][7] + sb[1][7]
-            cd = coal_dist(sa_d, sb_d, r, t)
+            cd = O.coal_dist(sa_d, sb_d, r, t)
             assert np.all(np.isfinite(out))
             if abs(cd) > 1e-6 * scale:
                 assert (cd < 0) == (st != C.ST_SEPARATED)

@@ -7,18 +7,12 @@ import pytest
 
 from mkcollision_ros.kernels.constants import ST_PENETRATING, ST_TOUCHING
 from mkcollision_ros.pipeline import Pipeline, PipelineConfig, StepResult
+from mkcollision_ros.rotations import quat_to_matrix
 from oracles import quat_axis, quat_mul
 
 PLANE = {"name": "ground", "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 0.0},
          "static": True}
 ID = [0.0, 0.0, 0.0, 1.0]
-
-
-def rotm(q):
-    x, y, z, w = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 # ---------------------------------------------------------------- validation
@@ -143,7 +137,7 @@ def test_box_resting_has_four_contacts_from_the_first_step():
     assert np.allclose(r.depth, 1e-4, atol=1e-9)
     assert np.allclose(r.point_a[:, 2], 0.0, atol=1e-12)          # on the plane
     corners = np.array([[sx * 0.5, sy * 0.3, -0.2] for sx in (-1, 1) for sy in (-1, 1)])
-    corners_w = corners @ rotm(quat[1]).T + pos[1]
+    corners_w = corners @ quat_to_matrix(quat[1]).T + pos[1]
     for c in corners_w:                                             # on the box corners
         assert np.min(np.linalg.norm(r.point_b - c, axis=1)) < 1e-9
     assert set(r.status.tolist()) == {ST_PENETRATING}
@@ -361,7 +355,7 @@ def test_clipping_large_face_on_small_face_and_tilted_boxes():
     corner_q = quat_mul(quat_axis([1, 0, 0], 0.6), quat_axis([0, 1, 0], 0.5))
 
     def rest_height(q, half):
-        r = rotm(q)
+        r = quat_to_matrix(q)
         corners = np.array([[x, y, z] for x in (-half, half) for y in (-half, half)
                             for z in (-half, half)]) @ r.T
         return -corners[:, 2].min()

@@ -90,49 +90,11 @@ import oracles as O
 from mkcollision_ros import collide
 from mkcollision_ros.kernels.constants import TOUCH_TOL
 from mkcollision_ros.results import Status
+from mkcollision_ros.rotations import matrix_to_quat
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENES_PATH = os.path.join(HERE, "regression_scenes.json")
 quat_matrix = O.quat_matrix
-
-
-# --- rotation matrix -> quaternion -----------------------------------------------------
-def quat_from_matrix(R):
-    """xyzw unit quaternion of a rotation matrix (Shepperd's method: the largest of
-    w, x, y, z is taken from the diagonal, the others from off-diagonal differences).
-    A matrix printed with finite digits is re-orthonormalised implicitly by the final
-    normalisation."""
-    R = np.asarray(R, dtype=np.float64)
-    t = np.trace(R)
-    cands = [t, R[0, 0], R[1, 1], R[2, 2]]
-    k = int(np.argmax(cands))
-    if k == 0:
-        s = 2.0 * math.sqrt(max(1.0 + t, 0.0))
-        w = 0.25 * s
-        x = (R[2, 1] - R[1, 2]) / s
-        y = (R[0, 2] - R[2, 0]) / s
-        z = (R[1, 0] - R[0, 1]) / s
-    elif k == 1:
-        s = 2.0 * math.sqrt(max(1.0 + R[0, 0] - R[1, 1] - R[2, 2], 0.0))
-        x = 0.25 * s
-        w = (R[2, 1] - R[1, 2]) / s
-        y = (R[0, 1] + R[1, 0]) / s
-        z = (R[0, 2] + R[2, 0]) / s
-    elif k == 2:
-        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] + R[1, 1] - R[2, 2], 0.0))
-        y = 0.25 * s
-        w = (R[0, 2] - R[2, 0]) / s
-        x = (R[0, 1] + R[1, 0]) / s
-        z = (R[1, 2] + R[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(max(1.0 - R[0, 0] - R[1, 1] + R[2, 2], 0.0))
-        z = 0.25 * s
-        w = (R[1, 0] - R[0, 1]) / s
-        x = (R[0, 2] + R[2, 0]) / s
-        y = (R[1, 2] + R[2, 1]) / s
-    q = np.array([x, y, z, w])
-    q /= np.linalg.norm(q)
-    return q if q[3] >= 0 else -q
 
 
 # --- closed forms (independent of the library) -----------------------------------------
@@ -500,7 +462,7 @@ def test_quat_from_matrix_round_trips():
     for q in qs:
         q = q / np.linalg.norm(q)
         R = quat_matrix(q)
-        q2 = quat_from_matrix(R)
+        q2 = matrix_to_quat(R)
         assert np.allclose(quat_matrix(q2), R, atol=1e-14)
         assert min(np.linalg.norm(q2 - q), np.linalg.norm(q2 + q)) < 1e-12
 

@@ -465,7 +465,7 @@ def test_degenerate_convex_point_and_segment():
 
 
 # --- box-box separating-axis closed form (auto) against GJK/EPA ----------------------------
-def test_box_box_sat_matches_gjk_epa():
+def test_collide_box_box_matches_gjk_epa():
     """auto runs SAT for boxes whose cores overlap (else GJK): the depth must equal
     GJK/EPA's (both exact for polytopes), the normal must be certified (its support value
     is the depth) and agree with EPA's where the minimum is unique, and the witness points
@@ -1520,8 +1520,9 @@ def _check_certified_shortcut(seed, kinds, n_oracle, h_slack):
 
 def test_cylinder_pair_ball_certified_depth_is_global():
     # Two cylinders whose cores overlap are first tried without GJK or EPA
-    # (kernels/pairs/cylinder_common.py): a rim's point nearest the other's axis, or the lowest point
-    # under the other's cap, whose ball inside the other is as deep as h_{A-B} along
+    # (kernels/pairs/cylinder_cylinder.py): a rim's point nearest the other's axis, or
+    # the lowest point under the other's cap, whose ball inside the other is as deep as
+    # h_{A-B} along
     # the other's normal there, certifies that h as the depth (within EPA_REL_TOL *
     # scale; it reports that h itself); so does the crossing of the two sides, h along
     # the normal to both axes against a witness's ball or, near a cylinder's end,
@@ -1635,7 +1636,7 @@ def test_cover_bound_holds_on_every_direction():
                                    "convex-cylinder", "cylinder-convex"])
 def test_cylinder_shortcut_certified_depth_is_global(order):
     # A capsule, an ellipsoid or a convex hull whose core overlaps a cylinder is first
-    # tried without GJK or EPA (capsule_cylinder.collide_capsule_cylinder, collide_ellipsoid_cylinder,
+    # tried without GJK or EPA (collide_capsule_cylinder, collide_ellipsoid_cylinder,
     # collide_cylinder_convex_ball): the core's point nearest the cylinder's axis against the
     # side, or its lowest point under a cap against that cap, whose ball inside the
     # cylinder is as deep as h_{A-B} along the normal there.  Checked on random pairs in
@@ -1684,7 +1685,7 @@ def _table_pair(table, pos, quat, k, n):
                                    "cylinder-convex", "box-cylinder", "cylinder-box",
                                    "ellipsoid-box", "box-ellipsoid"])
 def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
-    # Where cylinder_common's shortcuts find the cores apart (one past a cap's plane, beyond the
+    # Where the cylinder pair kernels find the cores apart (one past a cap's plane, beyond the
     # side's tangent plane (for two cylinders, either's, facing the other's centre),
     # or, for two cylinders, across the plane of their sides' crossing, or a hull's
     # shadow missing the side's disc; for a box, box_cylinder's line of centres or one of its
@@ -1697,7 +1698,7 @@ def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
     # by that much (h_{A-B}(n) by the numpy oracle); and both witnesses lie in their
     # shapes (the slow oracle's inside test).  At least 5% of the pairs are so decided
     # (measured here, in the orders listed: 116, 124, 116, 109, 87, 168, 155, 151 and 142
-    # of 600).  An ellipsoid and a box (boxell: a box face's plane) likewise, in both
+    # of 600).  An ellipsoid and a box (collide_ellipsoid_box: a box face's plane) likewise, in both
     # orders.
     from mkcollision_ros.kernels.constants import METHOD_NAMES, TOUCH_TOL
     from mkcollision_ros.kernels.geometry import inflation
@@ -1757,7 +1758,7 @@ def test_ellipsoid_box_shortcut_exact_distance_of_cores_apart(order):
     # Where the ellipsoid's core lies apart from the box over a face (its lowest point's
     # foot in the face), an edge or a vertex (ellipsoid_box._beyond_rim: Newton's method on
     # the edge's normal angle, or on a vertex's nearest point on the ellipsoid),
-    # boxell reports the cores' distance as exact, and the batch kernel takes it
+    # collide_ellipsoid_box reports the cores' distance as exact, and the batch kernel takes it
     # whether the shapes (grown by the rolling radius) then touch or not.  On random
     # pairs, each pair so decided: the exact row (cutoff inf) holds that distance less
     # the radii, in one iteration, and so does the contacts row (cutoff 0) where they
@@ -1840,7 +1841,7 @@ BOX_UNIT = {"type": "box", "size": [1.0, 1.0, 1.0]}
 def test_ellipsoid_box_shortcut_closed_form_scenes(scene, ellipsoid, z, depth, swap):
     # An ellipsoid over the middle of a unit box's top face, pressed into it: the depth,
     # the normal along z and the witnesses (the ellipsoid's lowest point and its foot
-    # on the face) in closed form, from boxell in one iteration (no GJK or EPA step),
+    # on the face) in closed form, from collide_ellipsoid_box in one iteration (no GJK or EPA step),
     # by both methods and with A and B swapped (normal flipped).
     for method in ("gjk_epa", "auto"):
         a, pose_a, b, pose_b = BOX_UNIT, ID, ellipsoid, pose([0.0, 0.0, z])
@@ -1912,8 +1913,9 @@ OCTAHEDRON = {"type": "convex", "points": [[0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], [0
 def test_cylinder_shortcut_closed_form_scenes(scene, other, pose_other, swap, depth, normal,
                                               point_a, method):
     # Closed-form depths of a capsule, an ellipsoid or a hull pressed into a cylinder's
-    # side or cap, or a cylinder crossing its side, taken by cylinder_common's shortcuts (one iteration:
-    # no GJK or EPA step), with the exact normal and witnesses; the same with A and B
+    # side or cap, or a cylinder crossing its side, taken by the cylinder pair kernels
+    # (kernels/pairs/; one iteration: no GJK or EPA step), with the exact normal and
+    # witnesses; the same with A and B
     # swapped (normal flipped).  The tilted ellipsoid and cylinder are checked without
     # a closed form: there the shortcut's depth is h(n) by the numpy oracle and no
     # deeper than the slow oracle's.

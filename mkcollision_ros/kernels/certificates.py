@@ -226,7 +226,7 @@ def _face_basin(rin, h):
 
     The same holds on a convex hull's face (rin: the foot's least distance to the
     triangle's edges); EPA does not test hull faces with it, as the test costs more
-    time than it saves (module docstring, phase 1)."""
+    time than it saves (gjk.py's docstring)."""
     if not h > 0.0:
         return 0.0
     return min(2.0 * math.atan(rin / h), EPA_FACE_CAP_MAX)

@@ -259,7 +259,7 @@ def _edge_of(F, g, a, b):
 @njit_kernel
 def _trace_polytope(fs, V, F, alive, nv, nf):
     """Record EPA's polytope (vertices V[:nv], the live faces among F[:nf]) in fs's
-    trace region (TR_EPA, module docstring)."""
+    trace region (TR_EPA, gjk_epa.py, "Trace")."""
     nlive = 0
     for f in range(nf):
         if alive[f]:

@@ -26,8 +26,9 @@ which pairs come here and which pair kernel (kernels/pairs/) runs first):
      (certificates.py).
   3. If a cap is hit (valleys of equally deep directions, e.g. a sphere centred on a
      cylinder's or cone's axis, two coaxial cylinders), the best upper bound min h(u)
-     over the evaluated normals is polished by a pattern search over directions (epa._polish_min_support) and
-     reported; the status is ST_FAILED only if the gap to the EPA lower bound exceeds
+     over the evaluated normals is polished by a pattern search over directions
+     (epa._polish_min_support) and reported; the status is ST_FAILED only if the gap to the
+     EPA lower bound exceeds
      EPA_FAIL_GAP * scale and that lower bound does not by itself prove penetration (a
      pair certainly in contact always yields its contact, e.g. to the pipeline, which
      drops failed pairs).  Then (_caps_fallback, below) a pair with a closed form takes it
@@ -193,7 +194,8 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ST_SEPARATED with ``distance`` a certified lower bound (> cutoff), the separating
     direction as normal and the current simplex points (moved out by the radii) as
     witness points, which then are not the closest points (a cylinder with a cylinder,
-    a capsule, an ellipsoid or a hull: cylinder_common's separating planes likewise, before GJK;
+    a capsule, an ellipsoid or a hull: the cylinder pair kernels' separating planes
+    likewise, before GJK;
     an ellipsoid and a box: ellipsoid_box's face and edge planes).  A
     pipeline that wants contacts only passes 0 and saves the GJK steps that would
     refine a distance it throws away (as MuJoCo's collision pass, which reports no
@@ -230,9 +232,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     res = ws[1][_RES:_RES + 10]
     fan = HE_UNDECIDED
     if not iterate and (sa[0] == CYLINDER or sb[0] == CYLINDER):
-        # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (cylcyl), or a
-        # box (boxcyl: the exact depth in closed form): cores that overlap get their
-        # depth certified (cylcyl: one core's point as deep inside the cylinder as h
+        # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (pairs/), or a
+        # box (box_cylinder: the exact depth in closed form): cores that overlap get their
+        # depth certified (cylinder_common: one core's point as deep inside the cylinder as h
         # along the normal there, by a ball); cores that a plane (a cap's, the side's
         # tangent plane, the sides' crossing; for a box, the line of centres or one of
         # box_cylinder's candidate directions) proves apart by more than the cutoff and the
@@ -250,7 +252,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             d = collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, res)
         elif other == CONVEX:
             if cylinder_hull_pair(sa, sb):
-                # the hull's fan stored (hullcyl): as the ellipsoid's below
+                # the hull's fan stored (cylinder_convex): as the ellipsoid's below
                 fan = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False,
                                               ra + rb + band, fs[_V:_V + HE_ROWS],
                                               fv[_FD:_FD + 8], res)
@@ -261,14 +263,14 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     elif not iterate and _ellipsoid_box(sa[0], sb[0]):
-        # an ellipsoid and a box (boxell): the core depth at a box face certified by a
+        # an ellipsoid and a box (ellipsoid_box): the core depth at a box face certified by a
         # ball, the cores' exact distance over a face, an edge or a vertex, or a plane
         # proving them farther apart than the cutoff and the touching band
         d, exact = collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
         if exact or (d < 0.0 and -d - ra - rb > band):
             return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     elif not iterate and ellipsoid_hull_pair(sa, sb):
-        # an ellipsoid and a small hull with its normal fan stored (hullell): the exact
+        # an ellipsoid and a small hull with its normal fan stored (ellipsoid_convex): the exact
         # depth when a cheap test proves the pair overlapping; without that proof, again
         # after GJK once it finds the cores overlapping (below, in place of EPA); or a
         # hull face's plane proving the cores farther apart than the cutoff and the

@@ -84,7 +84,7 @@ def make_gjk_workspace():
 @njit_kernel
 def make_gjk_workspace_traced(rows):
     """``make_gjk_workspace()`` with a trace region of ``rows`` (>= TR_HEADER_ROWS) rows
-    after fs's working rows (module docstring, "Trace"), its header and options zero:
+    after fs's working rows (gjk_epa.py, "Trace"), its header and options zero:
     the same array types, so ``gjk_epa_ws`` runs the same compiled code."""
     fs = np.empty((_FS_ROWS + rows, 3))
     for r in range(_FS_ROWS, _FS_ROWS + TR_HEADER_ROWS):

@@ -267,10 +267,12 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
 @njit_inline
 def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
     """_crossing_test for two cylinders, whatever EPA's best face: whether the
-    parallelogram face their sides make normal to both axes (cylinder_cylinder.sides_crossing)
-    holds a minimum of h, stored as _crossing_test stores it (ws t3 rows 15-18, the cap
-    in row 3).  (cylinder_cylinder.collide_cylinder_cylinder has certified the pairs where a witness's ball
-    reaches h before GJK; here the others, whose balls a cap cuts short.)
+    parallelogram face their sides make normal to both axes
+    (cylinder_cylinder.sides_crossing) holds a minimum of h, stored as _crossing_test
+    stores it (ws t3 rows 15-18, the cap in row 3).
+    (cylinder_cylinder.collide_cylinder_cylinder has certified the pairs where a
+    witness's ball reaches h before GJK; here the others, whose balls a cap cuts
+    short.)
 
     Why at once: it is the only crossing face two cylinders' difference has, so its
     normal n (normal to both axes) needs no search: along +-n both supports are side

@@ -16,7 +16,8 @@ from .cylinder_common import (_cap_normal, _certified_out, _frame, _past_cap, _p
 @njit_kernel
 def collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a capsule and a cylinder (either order), certified by the
-    module's ball, with res (10,) as collide_cylinder_cylinder's, or minus the gap (< 0) when a
+    ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus the
+    gap (< 0) when a
     plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when neither.
     A capsule's core is the segment c +- eta k
     (its axis); the depth of the capsules is the core depth grown by the radii.

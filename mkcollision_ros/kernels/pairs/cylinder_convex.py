@@ -301,7 +301,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
     pts = verts[v0:v0 + vn]
     tol = HE_SUPPORT_TOL * scale
     # C's centre c in the hull's frame and its offset below each face's plane (as
-    # hullell): all positive proves the overlap; the least is tried as a separating plane
+    # ellipsoid_convex): all positive proves the overlap; the least is tried as a separating plane
     omin, fmin = least_offset(verts, fl, fnr, nf, r00, r01, r02, r10, r11, r12, r20, r21,
                               r22, t0, t1, t2, Q)
     if not omin > 0.0:
@@ -560,7 +560,8 @@ def _shadow_closest(ax, ay, bx, by):
 @njit_kernel
 def collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a convex hull and a cylinder (either order), certified by
-    the module's ball, with res (10,) as collide_cylinder_cylinder's, or minus the gap (< 0) when
+    the ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus
+    the gap (< 0) when
     a plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when
     neither.  The hull's points are its vertices (verts, body frame) and their convex
     combinations; the candidates are hull points in the cylinder's frame:

@@ -26,7 +26,8 @@ def _k_point(cx, cy, cz, s00, s01, s02, s11, s12, roll, cs, sn, rs):
 @njit_kernel
 def collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of an ellipsoid and a cylinder (either order), certified by
-    the module's ball, with res (10,) as collide_cylinder_cylinder's, or minus the gap (< 0) when a
+    the ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus
+    the gap (< 0) when a
     plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when neither.
     The ellipsoid's core K is the
     ellipsoid E shrunk by its rolling radius r (geometry: h_K(u) = h_E(u) - r |u|); in

@@ -9,7 +9,7 @@ PACKAGE = "mkcollision_ros"
 setup(
     name=PACKAGE,
     version="0.1.0",
-    packages=[PACKAGE, f"{PACKAGE}.kernels", "msg_adapters"],
+    packages=[PACKAGE, f"{PACKAGE}.kernels", f"{PACKAGE}.kernels.pairs", "msg_adapters"],
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

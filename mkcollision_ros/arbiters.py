@@ -39,14 +39,14 @@ vectors are float64 in metres; depth >= 0 (m), distance = -depth when penetratin
 
 The whole step - merging the previous arbiters with this step's touching and undecided
 pairs (a sorted-key merge), matching, drift, reduction, ids, events and the compacted
-new state - is one serial numba kernel (``kernels.manifold.arbiter_step``), so a step
+new state - is one serial numba kernel (``kernels.persistence.arbiter_step``), so a step
 costs microseconds for a few pairs and ~1 us per touching pair, with no Python loop.
 """
 import numpy as np
 
 from .kernels.constants import ST_NOT_RUN
-from .kernels.manifold import (EV_BEGAN, EV_ENDED, EV_PERSISTED, MAX_MANIFOLD,
-                               arbiter_step)
+from .kernels.manifold import MAX_MANIFOLD
+from .kernels.persistence import EV_BEGAN, EV_ENDED, EV_PERSISTED, arbiter_step
 from .scene import KEY_BASE
 
 BEGAN = "began"

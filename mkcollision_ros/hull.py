@@ -460,7 +460,7 @@ def _fan_build(P, FN, FO, EV, VX):
 
 def fan_rows(points):
     """(faces, edges, vertices, rows): the normal fan of the hull of ``points`` (M, 3),
-    M <= FAN_MAX_POINTS, for kernels/hullell.py, as rows to store after the shape's
+    M <= FAN_MAX_POINTS, for kernels/pairs/ellipsoid_convex.py, as rows to store after the shape's
     points in the table's verts (such a hull has no group rows): ``faces`` rows of unit outward face
     normals, then one flat run of float64 values three to a row: the faces' offsets
     (the largest n . p over the points), the ``vertices``' point indices, and per edge

@@ -22,7 +22,7 @@ the others is dropped when the shape is built (mkcollision_ros.hull; no support 
 changes, every pass over the points gets shorter), and a hull of many points is stored in
 groups of nearby points whose bounding balls let the support skip most of them, one of
 at most 64 points with its faces, edges and vertices (the exact ellipsoid-hull kernel,
-kernels/hullell.py).
+kernels/pairs/ellipsoid_convex.py).
 Any shape may add ``margin: m`` (>= 0): the shape grown by a sphere of radius m.
 Invalid input raises ``ValueError`` with a message naming the shape and the key.
 """
@@ -173,7 +173,7 @@ def shape_row(shape, base_dir=None, prune=True):
             prm[P_GROUPS] = len(groups) // 2
             if len(groups) == 0:
                 # the hull's faces, edges and vertices for the exact ellipsoid-hull
-                # kernel (kernels/hullell.py; small hulls only, none when degenerate)
+                # kernel (kernels/pairs/ellipsoid_convex.py; small hulls only, none when degenerate)
                 nf, ne, nv, fan = fan_rows(verts)
                 prm[P_FAN_FACES], prm[P_FAN_EDGES], prm[P_FAN_VERTS] = nf, ne, nv
         radius = float(np.linalg.norm(verts, axis=1).max())

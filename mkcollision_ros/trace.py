@@ -36,7 +36,8 @@ import numpy as np
 from .hull import hull_triangles
 from .kernels.constants import OUT_SIZE, PLANE
 from .kernels.geometry import inflation, minkowski_full_xyz, quat_to_matrix
-from .kernels.gjk_epa import gjk_epa_ws, make_gjk_workspace_traced
+from .kernels.gjk_epa import gjk_epa_ws
+from .kernels.gjk_epa_workspace import make_gjk_workspace_traced
 from .kernels.mpr import MPR_WS_ROWS, mpr_ws
 from .kernels.tracebuf import (TR_EPA, TR_GJK, TR_HEADER_ROWS, TR_MPR_DISCOVERY,
                                TR_MPR_REFINEMENT)

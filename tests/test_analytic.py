@@ -527,7 +527,7 @@ SPHERE_WORLD = ["sphere", "box", "capsule", "cylinder", "cone", "ellipsoid"]
 def test_batch_sphere_pairs_solved_in_the_world_match_the_body_frame_closed_forms(kind):
     """The batch kernel (and the API) solves a sphere against a shape with a sphere-*
     closed form in the other body's frame, straight from the world poses, for either
-    order of the pair (kernels/analytic.sphere_world); the body-frame kernels of
+    order of the pair (kernels/sphere_shape.sphere_world); the body-frame kernels of
     collide_analytic, fed the relative pose, are the reference: the same status, the
     distance, normal and world witness points to round-off, the pair placed near the
     origin or 1e3 m from it."""
@@ -593,7 +593,7 @@ def test_batch_half_space_pairs_solved_in_the_world_match_the_body_frame_closed_
 
 def test_batch_capsule_pairs_solved_in_the_world_match_the_body_frame_closed_form():
     """Two capsules are solved straight from their world poses
-    (analytic.capsule_capsule_world, the same segment kernel as the body-frame path);
+    (capsule_capsule.capsule_capsule_world, the same segment kernel as the body-frame path);
     collide_analytic on the relative pose is the reference, to round-off, on random
     pairs, parallel axes (the overlap's middle) and axes crossing at the centres (the
     common perpendicular)."""

@@ -465,7 +465,7 @@ def test_degenerate_convex_point_and_segment():
 
 
 # --- box-box separating-axis closed form (auto) against GJK/EPA ----------------------------
-def test_box_box_sat_matches_gjk_epa():
+def test_collide_box_box_matches_gjk_epa():
     """auto runs SAT for boxes whose cores overlap (else GJK): the depth must equal
     GJK/EPA's (both exact for polytopes), the normal must be certified (its support value
     is the depth) and agree with EPA's where the minimum is unique, and the witness points
@@ -559,7 +559,7 @@ def test_epa_face_setup_flips_a_face_wound_toward_the_interior():
     # EPA sets up its new faces with _face_plane, which only flags a face wound toward
     # the interior point, and flips flagged faces in a second pass (_face_setup): check
     # both on one face in either winding and on a degenerate face.
-    from mkcollision_ros.kernels.gjk_epa import _face_plane, _face_setup
+    from mkcollision_ros.kernels.epa import _face_plane, _face_setup
     V = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [2.0, 0.0, 0.0]])
     cin = np.zeros(3)
     out_n, out_d = np.ones(3) / math.sqrt(3.0), 1.0 / math.sqrt(3.0)
@@ -595,10 +595,10 @@ def test_face_normal_minimum_is_exact(kind, cores):
     # interior: the deepest direction is the face normal, and the depth is the face's
     # height less the ellipsoid's lowest point, in closed form.
     # EPA alone stops within its tolerance (depths within 1e-8 * scale); the face test
-    # (gjk_epa._face_polish) lands on the normal itself, with the witness on the face
+    # (polish_faces._face_polish) lands on the normal itself, with the witness on the face
     # exactly on its plane: all pairs within EPA's bounds, and nearly all exact (49 or
     # 50 of 50; the others EPA closes before the face test's cap check passes).  A
-    # hull's faces are tested by GJK only (gjk_epa._hull_polish, on cores apart), so
+    # hull's faces are tested by GJK only (polish_faces._hull_polish, on cores apart), so
     # the hull is pressed in shallower than the rolling radius only.
     # Shallower than the ellipsoid's rolling radius its core stays apart from the face's
     # shape and GJK solves the pair: its own face test (in _gjk) takes the normal within
@@ -689,7 +689,7 @@ def test_hull_edge_minimum_is_on_the_crease(hull_is_a):
     # along x at z = 0.5, its two faces sloping down 35 degrees to either side).  Where
     # the deepest direction lies on the ridge's crease (the arc of directions normal to
     # x strictly between the two faces' normals), the crease search
-    # (gjk_epa._hull_polish) lands on it: the normal is normal to the ridge to
+    # (polish_faces._hull_polish) lands on it: the normal is normal to the ridge to
     # round-off, the depth is h(n) of the pair, and the hull's witness lies on the
     # ridge (within 1e-7 * scale: the search stops short of its minimum by a step
     # below POLISH_STEP_DONE, and the witnesses share the residual).  The ellipsoid
@@ -762,7 +762,7 @@ def test_deep_hull_ridge_and_apex_against_exact_depths(hull_is_a):
     #   function), the ridge's two ends tied as the support.
     # Where the feature is the support there (70 of the 120 pairs), the
     # depth must equal the bound, elsewhere be at least it.  EPA searches neither
-    # feature (gjk_epa._hull_side: searching them takes fewer steps but more time), so
+    # feature (polish_pairs._hull_side: searching them takes fewer steps but more time), so
     # its own tolerance holds: EPA_REL_TOL = 1e-8 * scale.
     rng = np.random.default_rng(25)
     pyramid = {"type": "convex", "points": [[0.0, 0.0, 0.5]] + [
@@ -797,7 +797,7 @@ def test_deep_hull_ridge_and_apex_against_exact_depths(hull_is_a):
 
 def test_sphere_deep_in_ellipsoid_with_margin_against_the_exact_depth():
     # An ellipsoid with a margin is no ellipsoid, so a sphere against it goes through
-    # GJK/EPA, not the closed form (analytic.has_point_form): with the sphere's centre
+    # GJK/EPA, not the closed form (sphere_shape.has_point_form): with the sphere's centre
     # c inside the ellipsoid E, the depth is c's distance to E's boundary plus the
     # margin and the sphere's radius (the shapes are E and c grown by those radii).
     # EPA takes a Newton minimum there under the 0.5 rad basin cap of pairs with
@@ -806,9 +806,9 @@ def test_sphere_deep_in_ellipsoid_with_margin_against_the_exact_depth():
     # rad from a deeper one).  Here 2,000 random deep pairs (on 100,000, all within
     # 3.6e-9 * scale) must be within EPA's
     # tolerance, EPA_REL_TOL = 1e-8 * scale, of the exact depth (the closed form's
-    # point-ellipsoid distance, analytic._point_ellipsoid, itself checked against a
+    # point-ellipsoid distance, sphere_shape._point_ellipsoid, itself checked against a
     # bisection here).
-    from mkcollision_ros.kernels.analytic import _point_ellipsoid
+    from mkcollision_ros.kernels.pairs.sphere_shape import _point_ellipsoid
     from mkcollision_ros.kernels.constants import M_GJK_EPA, OUT_SIZE
     from mkcollision_ros.kernels.narrowphase import collide_batch
     from mkcollision_ros.shapes import build_table
@@ -848,7 +848,7 @@ def test_cylinder_side_minimum_on_the_crease_from_gjks_early_gap(cylinder_is_a):
     # than its rolling radius: the cores stay apart and GJK solves the pair.  The
     # deepest direction is horizontal, on the crease of the cylinder's support function
     # (its support there is a segment of the side), where GJK alone closes its gap
-    # slowly.  The crease search (gjk_epa._kink_polish) lands on it: the normal is
+    # slowly.  The crease search (polish_crease._kink_polish) lands on it: the normal is
     # horizontal to round-off and the depth is h(n) to 1e-12 * scale; the cylinder's
     # witness lies on the side.  Once |v| proves that the shapes touch, GJK runs the
     # search from the face test's gap (0.1 |v|^2) rather than from GJK_POLISH_TOL
@@ -882,7 +882,7 @@ def test_cylinder_side_minimum_on_the_crease_from_gjks_early_gap(cylinder_is_a):
 
 
 def test_newton_minimum_is_stationary():
-    # Newton's method (gjk_epa._newton_min_support) ends once the step it would take
+    # Newton's method (polish_newton._newton_min_support) ends once the step it would take
     # next is below POLISH_STEP_DONE (1e-6 rad): the normal it returns must be a
     # stationary point of h = h_{A-B} on the unit sphere to that order (|grad| about
     # h'' times the step, h'' ~ scale).  The gradient of h there is the tangential part
@@ -927,7 +927,7 @@ def _box_hull(box):
 @pytest.mark.parametrize("cylinder_is_a", [False, True])
 def test_box_cylinder_closed_form_depth_is_exact_and_global(cylinder_is_a):
     # A box and a cylinder whose cores overlap are solved in closed form with a
-    # certificate (kernels/boxcyl.py), EPA running only where it cannot certify (a
+    # certificate (kernels/pairs/box_cylinder.py), EPA running only where it cannot certify (a
     # minimum on a box edge against a rim point, ~10% of random pairs).  The same
     # solid as a convex hull of the box's corners goes through EPA: statuses must
     # agree, depths within EPA's tolerance (EPA reports its nearest face, at most
@@ -975,7 +975,7 @@ def test_box_cylinder_closed_form_depth_is_exact_and_global(cylinder_is_a):
 @pytest.mark.parametrize("face_kind", ["cylinder", "box"])
 @pytest.mark.parametrize("other", ["point", "cylinder", "cone", "convex"])
 def test_face_basin_is_proved_against_any_shape(face_kind, other):
-    # The face test (gjk_epa._face_test) finds the normal n of a face of A (a
+    # The face test (polish_faces._face_test) finds the normal n of a face of A (a
     # cylinder's top cap, a box's top face) to be a local minimum of h = h_{A-B} when
     # B's support point along -n projects into the face, and claims a cap around n
     # (_face_basin: 2 atan(rin / h(n)), rin the radius of the largest disc about the
@@ -985,14 +985,15 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
     # below the face.  Against a single point the bound is exact along the tilt toward the
     # nearest side of the face, so there a direction 1.2 times farther out must be
     # deeper: the claimed cap is the whole basin, not a fraction of it.
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import gjk_epa_workspace as W
+    from mkcollision_ros.kernels import polish_faces as F
     from mkcollision_ros.kernels.constants import EPA_FACE_CAP_MAX
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(22)
     face = ({"type": "box", "size": [2.0, 1.6, 1.0]} if face_kind == "box"
             else {"type": "cylinder", "radius": 0.9, "height": 1.0})
     top = 0.5
-    ws = G.make_gjk_workspace()
+    ws = W.make_gjk_workspace()
     n = np.array([0.0, 0.0, 1.0])
     found, wide, tight = 0, 0, 0
     for _ in range(150):
@@ -1020,13 +1021,13 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
         sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
         scale = float(table.params[0, 7] + table.params[1, 7])
         args = (sa, sb, table.verts, np.ascontiguousarray(rb), pos_b, scale, ws)
-        if G._face_test(*args, 0, 2, 1.0) <= 0:
+        if F._face_test(*args, 0, 2, 1.0) <= 0:
             continue
         fs = ws[0]
-        assert np.allclose(fs[G._T3 + 15], n, atol=1e-12)
-        h0 = float(fs[G._T3 + 15] @ fs[G._T3 + 16])
+        assert np.allclose(fs[W._T3 + 15], n, atol=1e-12)
+        h0 = float(fs[W._T3 + 15] @ fs[W._T3 + 16])
         assert abs(h0 - depth) <= 1e-12 * scale
-        cap = float(fs[G._T3 + 3, 0])
+        cap = float(fs[W._T3 + 3, 0])
         assert 0.0 < cap <= EPA_FACE_CAP_MAX
         found += 1
         wide += cap >= 0.3
@@ -1049,17 +1050,18 @@ def test_face_basin_is_proved_against_any_shape(face_kind, other):
 
 def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
     # EPA tests two cylinders' crossing face once, at its start, along the normal n of
-    # both axes with n . t >= 0 (gjk_epa._cylinders_crossing): h(+-n) = r_a + r_b -+
+    # both axes with n . t >= 0 (polish_faces._cylinders_crossing): h(+-n) = r_a + r_b -+
     # n . t, and the foot of the origin lies at the same segment parameters on both
     # faces, so where the lower face fails the other fails too.  Checked against
     # _crossing_test along both signs (its general form, from a direction d), on random
     # pairs of cylinders: the same minimum, witnesses and cap where it is taken; the
     # other sign never a lower minimum; refused exactly where _crossing_test refuses
     # both, on pairs not separated along n (EPA's: the origin inside A - B).
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import gjk_epa_workspace as W
+    from mkcollision_ros.kernels import polish_faces as F
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(26)
-    ws = G.make_gjk_workspace()
+    ws = W.make_gjk_workspace()
     fs = ws[0]
     taken, refused = 0, 0
     for trial in range(400):
@@ -1073,8 +1075,8 @@ def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
         q = rng.normal(size=4)
         rot = np.ascontiguousarray(O.quat_matrix(q / np.linalg.norm(q)))
         t_ab = rng.uniform(-0.6, 0.6, 3)
-        got = G._cylinders_crossing(sa, sb, rot, t_ab, scale, fs)
-        mine = fs[G._T3 + 15:G._T3 + 19].copy(), float(fs[G._T3 + 3, 0])
+        got = F._cylinders_crossing(sa, sb, rot, t_ab, scale, fs)
+        mine = fs[W._T3 + 15:W._T3 + 19].copy(), float(fs[W._T3 + 3, 0])
         n = np.cross([0.0, 0.0, 1.0], rot[:, 2])
         n /= np.linalg.norm(n)
         if n @ t_ab < 0.0:
@@ -1082,12 +1084,12 @@ def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
         ks, hs = [], []
         for sgn in (1.0, -1.0):
             d = sgn * n
-            k = G._crossing_test(sa, sb, table.verts, rot, t_ab, scale, ws, 0,
+            k = F._crossing_test(sa, sb, table.verts, rot, t_ab, scale, ws, 0,
                                  d[0], d[1], d[2])
             ks.append(k)
-            hs.append(float(fs[G._T3 + 15] @ fs[G._T3 + 16]) if k == 1 else np.inf)
+            hs.append(float(fs[W._T3 + 15] @ fs[W._T3 + 16]) if k == 1 else np.inf)
             if sgn > 0 and k == 1:
-                theirs = fs[G._T3 + 15:G._T3 + 19].copy(), float(fs[G._T3 + 3, 0])
+                theirs = fs[W._T3 + 15:W._T3 + 19].copy(), float(fs[W._T3 + 3, 0])
         if ra + rb - n @ t_ab <= 0.0:
             # n separates them: EPA never runs on such a pair (h > 0 everywhere there)
             assert not got
@@ -1113,7 +1115,7 @@ def test_cylinders_crossing_is_the_crossing_test_at_the_lower_normal():
 def test_crossing_basin_is_proved(other):
     # Where a cylinder's side (A, along z) crosses B's segment (a cylinder's side, or a
     # convex hull's ridge) at a direction n normal to both, the two supports make a
-    # parallelogram face of A - B; gjk_epa._crossing_test finds n a local minimum of
+    # parallelogram face of A - B; polish_faces._crossing_test finds n a local minimum of
     # h = h_{A-B} when the pair of closest points of the two segments lies inside both,
     # and claims a cap around n (_face_basin) in which no direction is deeper.  Checked
     # here with the numpy oracle's h at directions inside the cap (half of them in its
@@ -1122,13 +1124,14 @@ def test_crossing_basin_is_proved(other):
     # bare segment (a two-point hull) normal to A's axis, the foot nearer A's segment's
     # end than B's, the bound is exact along the tilt toward A's end, so there a
     # direction 1.2 times the cap out must be deeper: the cap is the whole basin.
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import gjk_epa_workspace as W
+    from mkcollision_ros.kernels import polish_faces as F
     from mkcollision_ros.kernels.constants import EPA_FACE_CAP_MAX
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(23)
     cyl = {"type": "cylinder", "radius": 0.5, "height": 1.6}
     ra, ha = 0.5, 0.8
-    ws = G.make_gjk_workspace()
+    ws = W.make_gjk_workspace()
     z = np.array([0.0, 0.0, 1.0])
     found, wide, refused, tight = 0, 0, 0, 0
     for trial in range(120):
@@ -1171,11 +1174,11 @@ def test_crossing_basin_is_proved(other):
         if other != "cylinder":
             # EPA's best face: its support points on B, two of them the ridge's ends
             pts = np.asarray(shape["points"]) + pos_b
-            ws[2][G._IF] = [0, 1, 2]
-            ws[0][G._VB:G._VB + 3] = pts[[1, 4, 0]] if other == "convex" else pts[[0, 1, 0]]
+            ws[2][W._IF] = [0, 1, 2]
+            ws[0][W._VB:W._VB + 3] = pts[[1, 4, 0]] if other == "convex" else pts[[0, 1, 0]]
         d = n + rng.normal(size=3) * 0.01
         d /= np.linalg.norm(d)
-        k = G._crossing_test(sa, sb, table.verts, np.ascontiguousarray(rot), pos_b,
+        k = F._crossing_test(sa, sb, table.verts, np.ascontiguousarray(rot), pos_b,
                              scale, ws, 0, d[0], d[1], d[2])
         if outside:
             assert k == -1
@@ -1183,11 +1186,11 @@ def test_crossing_basin_is_proved(other):
             continue
         assert k == 1
         fs = ws[0]
-        assert np.allclose(fs[G._T3 + 15], n, atol=1e-12)
-        h0 = float(fs[G._T3 + 15] @ fs[G._T3 + 16])
+        assert np.allclose(fs[W._T3 + 15], n, atol=1e-12)
+        h0 = float(fs[W._T3 + 15] @ fs[W._T3 + 16])
         assert abs(h0 - depth) <= 1e-12 * scale
-        assert np.allclose(fs[G._T3 + 17], pa, atol=1e-12 * scale)
-        cap = float(fs[G._T3 + 3, 0])
+        assert np.allclose(fs[W._T3 + 17], pa, atol=1e-12 * scale)
+        cap = float(fs[W._T3 + 3, 0])
         assert 0.0 < cap <= EPA_FACE_CAP_MAX
         found += 1
         wide += cap >= 0.3
@@ -1210,7 +1213,7 @@ def test_crossing_basin_is_proved(other):
 
 @pytest.mark.parametrize("kind", ["cylinder", "box"])
 def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
-    # gjk_epa._ball_certified ends EPA at a polished minimum h(n) when a ball of radius
+    # certificates._ball_certified ends EPA at a polished minimum h(n) when a ball of radius
     # >= h(n) - tol about one shape's witness fits inside the other's core
     # (_core_inradius): A - B then holds that ball about the origin, so no direction
     # is shallower.  Checked here: the ball fits (its radius is at most h_A(u) - u . p
@@ -1218,7 +1221,8 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
     # numpy oracle's support function), it is the largest that fits (that minimum
     # equals it), a point outside the core gets -inf, and the certificate accepts
     # h(n) up to the radius + tol and refuses it just beyond.
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import certificates as K
+    from mkcollision_ros.kernels import gjk_epa_workspace as W
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(24)
     shape = ({"type": "cylinder", "radius": 0.4, "height": 1.5} if kind == "cylinder"
@@ -1226,7 +1230,7 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
     table = build_table([shape, {"type": "sphere", "radius": 0.1}])
     sa = (table.codes[0], table.params[0], table.vrange[0, 0], table.vrange[0, 1])
     sb = (table.codes[1], table.params[1], table.vrange[1, 0], table.vrange[1, 1])
-    ws = G.make_gjk_workspace()
+    ws = W.make_gjk_workspace()
     fs = ws[0]
     u = rng.normal(size=(4000, 3))
     u /= np.linalg.norm(u, axis=1, keepdims=True)
@@ -1238,7 +1242,7 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
         t_ab = rng.normal(size=3)
         # B's point p of its own frame, in A's: the test converts it back
         x = rot @ p + t_ab
-        rho = G._core_inradius(1, sb, sa, rot, t_ab, x[0], x[1], x[2])
+        rho = K._core_inradius(1, sb, sa, rot, t_ab, x[0], x[1], x[2])
         if kind == "cylinder":
             k = np.array([p[0], p[1], 0.0]) / max(math.hypot(p[0], p[1]), 1e-300)
             normals = np.array([k, (0, 0, 1.0), (0, 0, -1.0)])
@@ -1257,20 +1261,20 @@ def test_ball_certificate_is_a_lower_bound_on_the_depth(kind):
         n = rng.normal(size=3)
         n /= np.linalg.norm(n)
         for h, expect in ((rho + 0.99 * tol, True), (rho + 1.01 * tol, False)):
-            fs[G._T3 + 15] = n
-            fs[G._T3 + 16] = h * n
-            fs[G._T3 + 17] = x
-            fs[G._T3 + 18] = x - h * n
-            bound = G._pending_bound(sb, sa, rot, t_ab, fs, tol)
+            fs[W._T3 + 15] = n
+            fs[W._T3 + 16] = h * n
+            fs[W._T3 + 17] = x
+            fs[W._T3 + 18] = x - h * n
+            bound = K._pending_bound(sb, sa, rot, t_ab, fs, tol)
             if expect:
                 assert bound == -np.inf
             else:     # h(n) - tol, to rounding (the kernel's dot may fuse multiply-adds)
-                assert abs(bound - (float(n @ fs[G._T3 + 16]) - tol)) <= 1e-15
+                assert abs(bound - (float(n @ fs[W._T3 + 16]) - tol)) <= 1e-15
     assert inside >= 15 and outside >= 15
 
 
 def test_rolling_ball_lies_in_the_ellipsoid_core_and_touches_it():
-    # gjk_epa._rolling_ball: at an ellipsoid core's point x with outward normal n, the
+    # certificates._rolling_ball: at an ellipsoid core's point x with outward normal n, the
     # ball of radius rho about q = x - rho n, rho = c^2 / |D n| - P_ROLL.  Checked on
     # random ellipsoids (axis ratios up to 20) and normals, on either side of the pair:
     # the ball lies in the core (q . u + rho <= h_core(u) along 200,000 random u and the
@@ -1281,7 +1285,7 @@ def test_rolling_ball_lies_in_the_ellipsoid_core_and_touches_it():
     # directions wherever rho is at least a tenth of c - P_ROLL (it is the largest ball
     # touching at x; measured here: all 73 such cases; smaller balls stick out by less
     # than the directions resolve).
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import certificates as K
     from mkcollision_ros.kernels.constants import P_ROLL
     from mkcollision_ros.kernels.geometry import support_core_xyz
     from mkcollision_ros.shapes import build_table
@@ -1308,7 +1312,7 @@ def test_rolling_ball_lies_in_the_ellipsoid_core_and_touches_it():
         xl = np.array(support_core_xyz(table.codes[side], prm, table.verts, 0, 0, *m))
         # in A's frame (the shape is B on side 1)
         x, n = (xl, m) if side == 0 else (rot @ xl + t_ab, rot @ m)
-        qx, qy, qz, rho = G._rolling_ball(side, sa, sb, rot, *x, *n)
+        qx, qy, qz, rho = K._rolling_ball(side, sa, sb, rot, *x, *n)
         q = np.array([qx, qy, qz])
         ql = q if side == 0 else rot.T @ (q - t_ab)
         dirs = np.vstack([u, m])
@@ -1330,7 +1334,7 @@ def test_rolling_ball_lies_in_the_ellipsoid_core_and_touches_it():
 
 @pytest.mark.parametrize("kind", ["box", "cylinder", "ellipsoid", "convex", "capsule"])
 def test_rolling_ball_certificate_is_a_lower_bound_on_the_depth(kind):
-    # gjk_epa._ball_certified with an ellipsoid: A' - B' lies in A - B for the
+    # certificates._ball_certified with an ellipsoid: A' - B' lies in A - B for the
     # ellipsoid's rolling ball (_rolling_ball) as A' and the other shape's witness
     # point, its own ball, or (box, cylinder) its whole core as B', so a direction
     # whose h is at most such a pair's depth plus tol is the depth.  Checked on the
@@ -1342,7 +1346,7 @@ def test_rolling_ball_certificate_is_a_lower_bound_on_the_depth(kind):
     # deep pairs, at least 10 of them where the witnesses' balls alone (_core_inradius)
     # do not (measured: box 135 of 269, 84 beyond those balls; cylinder 148 of 277, 82;
     # ellipsoid 204 of 275; convex 100 of 245; capsule 207 of 258, all beyond).
-    from mkcollision_ros.kernels import gjk_epa as G
+    from mkcollision_ros.kernels import certificates as K
     from mkcollision_ros.kernels.geometry import inflation, quat_to_matrix, relative_pose
     from mkcollision_ros.shapes import build_table
     rng = np.random.default_rng(361)
@@ -1370,11 +1374,11 @@ def test_rolling_ball_certificate_is_a_lower_bound_on_the_depth(kind):
         b = ma.T @ (out[k, OUT_PB:OUT_PB + 3] - pa[k]) + rb * n
         tol = 1e-9 * scale
         hmin = depth - ra - rb - tol
-        if not G._ball_certified(shapes[0], shapes[1], r_ab, t_ab, hmin, *n, *a, *b):
+        if not K._ball_certified(shapes[0], shapes[1], r_ab, t_ab, hmin, *n, *a, *b):
             continue
         accepted += 1
-        beyond_points += max(G._core_inradius(0, *shapes, r_ab, t_ab, *b),
-                             G._core_inradius(1, *shapes, r_ab, t_ab, *a)) < hmin
+        beyond_points += max(K._core_inradius(0, *shapes, r_ab, t_ab, *b),
+                             K._core_inradius(1, *shapes, r_ab, t_ab, *a)) < hmin
         near = nw + 0.05 * rng.uniform(-1.0, 1.0, (2000, 3))
         w = np.vstack([dirs, near / np.linalg.norm(near, axis=1, keepdims=True)])
         h = O.cso_support(sa[k], (pa[k], qa_k), sb[k], (pb[k], qb_k), w)
@@ -1386,7 +1390,7 @@ def test_rolling_ball_certificate_is_a_lower_bound_on_the_depth(kind):
 
 def test_box_vertex_minimum_against_an_ellipsoid_is_the_depth():
     # EPA's Newton minimum in a box vertex's region against an ellipsoid
-    # (gjk_epa._vertex_cap): kept under the plane test in the cap no box crease
+    # (certificates._vertex_cap): kept under the plane test in the cap no box crease
     # crosses, where the box's support is that one vertex.  Checked on the deep pairs
     # of 2,000 random ellipsoid-box pairs (box as A or B) whose normal lies in a
     # vertex's region (more than 0.05 rad from every crease of the box): the depth is
@@ -1418,46 +1422,51 @@ def test_box_vertex_minimum_against_an_ellipsoid_is_the_depth():
 
 
 def _hull_cylinder_first(sa, sb, verts, r_ab, t_ab, scale, res):
-    """What gjk_epa_ws tries first for a cylinder and a hull (contacts mode): hullcyl's
-    exact depth or separating plane when the hull has its fan stored (stop: the
-    inflation radii and the touching band), cylcyl's hull_cylinder_depth where that
-    decides nothing (HE_UNDECIDED) or there is no fan; 0 when neither answers."""
-    from mkcollision_ros.kernels import cylcyl as C
+    """What gjk_epa_ws tries first for a cylinder and a hull (contacts mode):
+    collide_cylinder_convex's exact depth or separating plane when the hull has its fan
+    stored (stop: the inflation radii and the touching band), collide_cylinder_convex_ball
+    where that decides nothing (HE_UNDECIDED) or there is no fan; 0 when neither
+    answers."""
     from mkcollision_ros.kernels.constants import TOUCH_TOL
     from mkcollision_ros.kernels.geometry import inflation
-    from mkcollision_ros.kernels.hullcyl import cylinder_hull_depth, cylinder_hull_pair
-    from mkcollision_ros.kernels.hullell import HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED
+    from mkcollision_ros.kernels.pairs.cylinder_convex import (collide_cylinder_convex,
+                                                               collide_cylinder_convex_ball,
+                                                               cylinder_hull_pair)
+    from mkcollision_ros.kernels.pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED
     got = HE_UNDECIDED
     if cylinder_hull_pair(sa, sb):
         stop = inflation(sa[0], sa[1]) + inflation(sb[0], sb[1]) + TOUCH_TOL * scale
-        got = cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, False, stop,
-                                  np.zeros((HE_ROWS, 3)), np.zeros(8), res)
+        got = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
+                                      np.zeros((HE_ROWS, 3)), np.zeros(8), res)
     if got == HE_EXACT or got == HE_APART:
         return res[0]
-    return C.hull_cylinder_depth(sa, sb, verts, r_ab, t_ab, scale, res) if (
+    return collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res) if (
         got == HE_UNDECIDED) else 0.0
 
 
 def _cylinder_shortcut(kinds):
-    """cylcyl's shortcut for a cylinder and the other kind of ``kinds`` (boxcyl's for a
-    box; boxell's for an ellipsoid and a box, its value only; for a hull, hullcyl's
-    first, _hull_cylinder_first), as f(shape_a, shape_b, verts, r_ab, t_ab, scale,
-    res)."""
-    from mkcollision_ros.kernels import cylcyl as C
+    """The pair kernel before GJK for a cylinder and the other kind of ``kinds``
+    (collide_box_cylinder for a box; collide_ellipsoid_box for an ellipsoid and a box,
+    its value only; for a hull, collide_cylinder_convex first, _hull_cylinder_first), as
+    f(shape_a, shape_b, verts, r_ab, t_ab, scale, res)."""
+    from mkcollision_ros.kernels.pairs.capsule_cylinder import collide_capsule_cylinder
+    from mkcollision_ros.kernels.pairs.cylinder_cylinder import collide_cylinder_cylinder
+    from mkcollision_ros.kernels.pairs.ellipsoid_cylinder import collide_ellipsoid_cylinder
     if sorted(kinds) == ["box", "ellipsoid"]:
-        from mkcollision_ros.kernels.boxell import ellipsoid_box_depth
-        return lambda sa, sb, verts, r_ab, t_ab, scale, res: ellipsoid_box_depth(
+        from mkcollision_ros.kernels.pairs.ellipsoid_box import collide_ellipsoid_box
+        return lambda sa, sb, verts, r_ab, t_ab, scale, res: collide_ellipsoid_box(
             sa, sb, r_ab, t_ab, scale, 0.0, res)[0]
     other = kinds[0] if kinds[1] == "cylinder" else kinds[1]
     if other == "cylinder":
-        return C.cylinders_depth
+        return collide_cylinder_cylinder
     if other == "box":
-        from mkcollision_ros.kernels.boxcyl import BC_MAX_LEVEL, box_cylinder_depth
-        return lambda sa, sb, verts, r_ab, t_ab, scale, res: box_cylinder_depth(
+        from mkcollision_ros.kernels.constants import BC_MAX_LEVEL
+        from mkcollision_ros.kernels.pairs.box_cylinder import collide_box_cylinder
+        return lambda sa, sb, verts, r_ab, t_ab, scale, res: collide_box_cylinder(
             sa, sb, r_ab, t_ab, scale, np.zeros((BC_MAX_LEVEL + 8, 3)), res)
     if other == "convex":
         return _hull_cylinder_first
-    f = C.segment_cylinder_depth if other == "capsule" else C.ellipsoid_cylinder_depth
+    f = collide_capsule_cylinder if other == "capsule" else collide_ellipsoid_cylinder
     return lambda sa, sb, verts, r_ab, t_ab, scale, res: f(sa, sb, r_ab, t_ab, scale, res)
 
 
@@ -1511,12 +1520,13 @@ def _check_certified_shortcut(seed, kinds, n_oracle, h_slack):
 
 def test_cylinder_pair_ball_certified_depth_is_global():
     # Two cylinders whose cores overlap are first tried without GJK or EPA
-    # (kernels/cylcyl.py): a rim's point nearest the other's axis, or the lowest point
-    # under the other's cap, whose ball inside the other is as deep as h_{A-B} along
+    # (kernels/pairs/cylinder_cylinder.py): a rim's point nearest the other's axis, or
+    # the lowest point under the other's cap, whose ball inside the other is as deep as
+    # h_{A-B} along
     # the other's normal there, certifies that h as the depth (within EPA_REL_TOL *
     # scale; it reports that h itself); so does the crossing of the two sides, h along
     # the normal to both axes against a witness's ball or, near a cylinder's end,
-    # against cylcyl._crossing_global's bound.  Checked on random pairs as
+    # against cylinder_cylinder._crossing_global's bound.  Checked on random pairs as
     # _check_certified_shortcut says.  At least 20% of the penetrating pairs are
     # certified (measured here 316 of 750, 42%: these overlaps are deep, up to the
     # centres' coinciding), at least 100 of them by the crossing (measured here: 200;
@@ -1532,7 +1542,7 @@ def test_cylinder_pair_ball_certified_depth_is_global():
 
 def test_crossing_global_certificate_holds_on_every_direction():
     # Where two cylinders' sides cross near an end, neither witness's ball is as deep
-    # as h(n) and cylcyl._crossing_global certifies h(n) instead: a bound on h(w) - h
+    # as h(n) and cylinder_cylinder._crossing_global certifies h(n) instead: a bound on h(w) - h
     # over the plane of the axes (an inner disc from the witnesses' room to the ends,
     # then rings from the concavity of h along rays and the shadow's eight edge
     # normals).  Checked on random crossings (A on the z axis at the origin, B anywhere):
@@ -1540,7 +1550,7 @@ def test_crossing_global_certificate_holds_on_every_direction():
     # within 0.05 rad of n is never below h - tol; and it certifies at least 40% of
     # the crossings whose witnesses are both on their segments (measured: 386 of 603),
     # at least 100 of them where neither ball does (measured: 224).
-    from mkcollision_ros.kernels.cylcyl import _crossing_global
+    from mkcollision_ros.kernels.pairs.cylinder_cylinder import _crossing_global
     from mkcollision_ros.kernels.geometry import quat_to_matrix
     rng = np.random.default_rng(83)
     dirs = rng.normal(size=(200_000, 3))
@@ -1581,7 +1591,7 @@ def test_crossing_global_certificate_holds_on_every_direction():
 
 def test_cover_bound_holds_on_every_direction():
     # Where a cap or the side cuts the ball of a point p of one cylinder inside the
-    # other short, cylcyl._cover may still bound the depth by p's gap delta to the
+    # other short, cylinder_common._cover may still bound the depth by p's gap delta to the
     # other's side or cap: every translate by |t| < delta meets the other cylinder at
     # p or at a point of three segments from p (its side line, its cap's diameter,
     # the diagonal).  Checked on random rim points p of a cylinder Y inside X (on the
@@ -1589,7 +1599,7 @@ def test_cover_bound_holds_on_every_direction():
     # 200,000 random unit directions is never below delta, and the ball about p is
     # shorter than delta (the cover, not the ball, gave it).  At least 150 points of
     # each kind are covered (measured: 206 under a side, 215 under a cap).
-    from mkcollision_ros.kernels.cylcyl import _cover
+    from mkcollision_ros.kernels.pairs.cylinder_common import _cover
     from mkcollision_ros.kernels.geometry import quat_to_matrix
     rng = np.random.default_rng(89)
     dirs = rng.normal(size=(200_000, 3))
@@ -1626,8 +1636,8 @@ def test_cover_bound_holds_on_every_direction():
                                    "convex-cylinder", "cylinder-convex"])
 def test_cylinder_shortcut_certified_depth_is_global(order):
     # A capsule, an ellipsoid or a convex hull whose core overlaps a cylinder is first
-    # tried without GJK or EPA (cylcyl.segment_cylinder_depth, ellipsoid_cylinder_depth,
-    # hull_cylinder_depth): the core's point nearest the cylinder's axis against the
+    # tried without GJK or EPA (collide_capsule_cylinder, collide_ellipsoid_cylinder,
+    # collide_cylinder_convex_ball): the core's point nearest the cylinder's axis against the
     # side, or its lowest point under a cap against that cap, whose ball inside the
     # cylinder is as deep as h_{A-B} along the normal there.  Checked on random pairs in
     # both orders as _check_certified_shortcut says; the depth reported is the
@@ -1675,10 +1685,10 @@ def _table_pair(table, pos, quat, k, n):
                                    "cylinder-convex", "box-cylinder", "cylinder-box",
                                    "ellipsoid-box", "box-ellipsoid"])
 def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
-    # Where cylcyl's shortcuts find the cores apart (one past a cap's plane, beyond the
+    # Where the cylinder pair kernels find the cores apart (one past a cap's plane, beyond the
     # side's tangent plane (for two cylinders, either's, facing the other's centre),
     # or, for two cylinders, across the plane of their sides' crossing, or a hull's
-    # shadow missing the side's disc; for a box, boxcyl's line of centres or one of its
+    # shadow missing the side's disc; for a box, box_cylinder's line of centres or one of its
     # candidate directions) they return minus that plane's gap, with its normal and a
     # point of each core; in contacts mode (cutoff 0) gjk_epa_ws then ends the pair with
     # that bound, without GJK, when it clears the touching band.  On random pairs, each
@@ -1688,7 +1698,7 @@ def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
     # by that much (h_{A-B}(n) by the numpy oracle); and both witnesses lie in their
     # shapes (the slow oracle's inside test).  At least 5% of the pairs are so decided
     # (measured here, in the orders listed: 116, 124, 116, 109, 87, 168, 155, 151 and 142
-    # of 600).  An ellipsoid and a box (boxell: a box face's plane) likewise, in both
+    # of 600).  An ellipsoid and a box (collide_ellipsoid_box: a box face's plane) likewise, in both
     # orders.
     from mkcollision_ros.kernels.constants import METHOD_NAMES, TOUCH_TOL
     from mkcollision_ros.kernels.geometry import inflation
@@ -1731,7 +1741,7 @@ def test_cylinder_shortcut_apart_bound_is_a_separating_plane(order):
 @pytest.mark.parametrize("order", ["ellipsoid-box", "box-ellipsoid"])
 def test_ellipsoid_box_shortcut_certified_depth_is_global(order):
     # An ellipsoid whose core overlaps a box is first tried without GJK or EPA
-    # (kernels/boxell.py): the core's lowest point under the face of least h, whose
+    # (kernels/pairs/ellipsoid_box.py): the core's lowest point under the face of least h, whose
     # rolling ball lies as deep in the box as that h.  Checked on random pairs in both
     # orders as _check_certified_shortcut says (the depth reported is h itself).  At
     # least 15% of the penetrating pairs are certified (measured here: 156 of 707 and
@@ -1746,9 +1756,9 @@ def test_ellipsoid_box_shortcut_certified_depth_is_global(order):
 @pytest.mark.parametrize("order", ["ellipsoid-box", "box-ellipsoid"])
 def test_ellipsoid_box_shortcut_exact_distance_of_cores_apart(order):
     # Where the ellipsoid's core lies apart from the box over a face (its lowest point's
-    # foot in the face), an edge or a vertex (boxell._beyond_rim: Newton's method on
+    # foot in the face), an edge or a vertex (ellipsoid_box._beyond_rim: Newton's method on
     # the edge's normal angle, or on a vertex's nearest point on the ellipsoid),
-    # boxell reports the cores' distance as exact, and the batch kernel takes it
+    # collide_ellipsoid_box reports the cores' distance as exact, and the batch kernel takes it
     # whether the shapes (grown by the rolling radius) then touch or not.  On random
     # pairs, each pair so decided: the exact row (cutoff inf) holds that distance less
     # the radii, in one iteration, and so does the contacts row (cutoff 0) where they
@@ -1759,7 +1769,7 @@ def test_ellipsoid_box_shortcut_exact_distance_of_cores_apart(order):
     # short on some, by up to 5e-7 * scale).  At least a quarter of the pairs are so
     # decided, at least 50 of them penetrating (measured here: 226 and 248 of 600, 89
     # and 80 penetrating).
-    from mkcollision_ros.kernels.boxell import ellipsoid_box_depth
+    from mkcollision_ros.kernels.pairs.ellipsoid_box import collide_ellipsoid_box
     from mkcollision_ros.kernels.constants import METHOD_NAMES, TOUCH_TOL
     from mkcollision_ros.kernels.geometry import inflation
     from mkcollision_ros.kernels.narrowphase import collide_batch
@@ -1778,7 +1788,7 @@ def test_ellipsoid_box_shortcut_exact_distance_of_cores_apart(order):
     for k in range(n):
         shapes, scale, r_ab, t_ab = _table_pair(table, pos, quat, k, n)
         res = np.zeros(10)
-        d, exact = ellipsoid_box_depth(shapes[0], shapes[1], r_ab, t_ab, scale, np.inf, res)
+        d, exact = collide_ellipsoid_box(shapes[0], shapes[1], r_ab, t_ab, scale, np.inf, res)
         if not (exact and d <= 0.0):
             continue
         decided += 1
@@ -1831,7 +1841,7 @@ BOX_UNIT = {"type": "box", "size": [1.0, 1.0, 1.0]}
 def test_ellipsoid_box_shortcut_closed_form_scenes(scene, ellipsoid, z, depth, swap):
     # An ellipsoid over the middle of a unit box's top face, pressed into it: the depth,
     # the normal along z and the witnesses (the ellipsoid's lowest point and its foot
-    # on the face) in closed form, from boxell in one iteration (no GJK or EPA step),
+    # on the face) in closed form, from collide_ellipsoid_box in one iteration (no GJK or EPA step),
     # by both methods and with A and B swapped (normal flipped).
     for method in ("gjk_epa", "auto"):
         a, pose_a, b, pose_b = BOX_UNIT, ID, ellipsoid, pose([0.0, 0.0, z])
@@ -1903,8 +1913,9 @@ OCTAHEDRON = {"type": "convex", "points": [[0.1, 0.0, 0.0], [-0.1, 0.0, 0.0], [0
 def test_cylinder_shortcut_closed_form_scenes(scene, other, pose_other, swap, depth, normal,
                                               point_a, method):
     # Closed-form depths of a capsule, an ellipsoid or a hull pressed into a cylinder's
-    # side or cap, or a cylinder crossing its side, taken by cylcyl's shortcuts (one iteration:
-    # no GJK or EPA step), with the exact normal and witnesses; the same with A and B
+    # side or cap, or a cylinder crossing its side, taken by the cylinder pair kernels
+    # (kernels/pairs/; one iteration: no GJK or EPA step), with the exact normal and
+    # witnesses; the same with A and B
     # swapped (normal flipped).  The tilted ellipsoid and cylinder are checked without
     # a closed form: there the shortcut's depth is h(n) by the numpy oracle and no
     # deeper than the slow oracle's.

@@ -183,7 +183,7 @@ def test_kernels_give_identical_results_with_the_pruned_points():
     pruned = build_table(shapes)
     whole = build_table(shapes, prune=False)
     # hulls of at most FAN_MAX_POINTS kept points carry their normal fan, which answers
-    # an ellipsoid's pairs by another method (kernels/hullell.py): off here
+    # an ellipsoid's pairs by another method (kernels/pairs/ellipsoid_convex.py): off here
     params = pruned.params.copy()
     fan = pruned.codes == C.CONVEX
     assert np.all(params[fan, C.P_FAN_FACES] > 0)

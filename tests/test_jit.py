@@ -82,6 +82,22 @@ def test_two_copies_of_the_package_share_one_cache(tmp_path):
     assert len(os.listdir(tmp_path / "cache" / "mkcollision_ros")) == 2
 
 
+
+def test_cache_folder_covers_sub_packages_and_files_them_apart():
+    """The cache folder's hash covers every kernel source, kernels/pairs/ included (an
+    edit there must not reuse a stale cache), and SharedCacheLocator files each source
+    folder under its own path inside the package's parent."""
+    import os
+
+    here = os.path.dirname(jit.__file__)
+    rels = jit._kernel_sources(here)
+    assert rels == sorted(rels)
+    assert "gjk_epa.py" in rels and "pairs/ellipsoid_box.py" in rels
+    sub = jit.SharedCacheLocator.get_suitable_cache_subpath
+    assert sub(os.path.join(here, "gjk.py")) == os.path.join("mkcollision_ros", "kernels")
+    assert sub(os.path.join(here, "pairs", "box_box.py")) == os.path.join(
+        "mkcollision_ros", "kernels", "pairs")
+
 _NESTED = '''
 import sys
 import numpy as np

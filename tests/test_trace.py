@@ -14,7 +14,8 @@ from mkcollision_ros import collide
 from mkcollision_ros.kernels.constants import (EPA_FACE_TOL, OUT_DIST, OUT_NORMAL,
                                                OUT_SIZE, ST_PENETRATING, ST_SEPARATED,
                                                TOUCH_TOL)
-from mkcollision_ros.kernels.gjk_epa import gjk_epa_ws, make_gjk_workspace
+from mkcollision_ros.kernels.gjk_epa import gjk_epa_ws
+from mkcollision_ros.kernels.gjk_epa_workspace import make_gjk_workspace
 from mkcollision_ros.kernels.mpr import MPR_WS_ROWS, mpr_ws
 from mkcollision_ros.kernels.tracebuf import (TR_EPA, TR_GJK, TR_MPR_DISCOVERY,
                                               TR_MPR_REFINEMENT)
@@ -114,7 +115,7 @@ def test_gjk_final_simplex_is_at_the_core_distance():
         core = out[OUT_DIST] + pair.core_radius
         v = np.linalg.norm(_min_norm_point(simplices[-1]))
         # the simplex lies in the cores' difference: |v| >= the distance; GJK stops
-        # on its duality gap or polishes from a gap of 0.1 |v|^2 (gjk_epa._gjk)
+        # on its duality gap or polishes from a gap of 0.1 |v|^2 (gjk._gjk)
         assert v >= core - 1e-9 * scale
         assert v - core <= 0.1 * v + 1e-9 * scale, (sa, pa, sb, pb, v, core)
     assert n_apart > 50

@@ -2,11 +2,12 @@
 
 Times on this machine wander in spells; the number of support points a pair takes does
 not, and an idea that saves none saves no time.  This counts the calls of
-``gjk_epa.minkowski_core_xyz`` (every GJK, EPA and polish step makes one) for each deep
+``minkowski_core_xyz`` in the GJK/EPA modules (every GJK, EPA and polish step makes one;
+gjk.py, epa.py, polish_*.py, certificates.py, gjk_epa.py) for each deep
 pair (depth > 1e-3 * scale in bench/dev/deep_pairs.py's reference run) through ``gjk_epa_ws``
 in contacts mode, split by whether EPA ran (the cores overlap) or not (GJK alone on cores
-apart, or a closed-form shortcut such as cylcyl's, which calls no support of A - B and
-counts 0), and for a pair with a box by the box's feature along the answer's normal
+apart, or a pair kernel before GJK (kernels/pairs/), whose supports are not counted:
+0), and for a pair with a box by the box's feature along the answer's normal
 (face, edge or vertex: how many of its axes are normal to it).  It also prints the
 answer's largest departure from the reference depth.  Run it with numba off:
 
@@ -27,7 +28,8 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 
 from bench.common import relative_poses  # noqa: E402
 from bench.dev.deep_pairs import load_cases  # noqa: E402
-from mkcollision_ros.kernels import gjk_epa as G  # noqa: E402
+from mkcollision_ros.kernels import (certificates, epa, gjk, gjk_epa,  # noqa: E402
+                                     polish_crease, polish_faces, polish_newton, polish_pairs)
 from mkcollision_ros.kernels.constants import BOX, OUT_SIZE  # noqa: E402
 
 FEATURE = {0: "vertex", 1: "edge", 2: "face"}
@@ -47,7 +49,10 @@ def main():
     scale = table.params[0::2, 7] + table.params[1::2, 7]
     sel = np.flatnonzero(ref["out"][:, 0] < -1e-3 * scale)[:args.n]
     calls, ran = [0], [False]
-    support, epa = G.minkowski_core_xyz, G._epa
+    counted_modules = [m for m in (gjk, epa, polish_newton, polish_crease, polish_faces,
+                                   polish_pairs, certificates, gjk_epa)
+                       if hasattr(m, "minkowski_core_xyz")]
+    support, epa_run = gjk.minkowski_core_xyz, gjk_epa._epa
 
     def counted(*a):
         calls[0] += 1
@@ -55,10 +60,12 @@ def main():
 
     def epa_seen(*a):
         ran[0] = True
-        return epa(*a)
+        return epa_run(*a)
 
-    G.minkowski_core_xyz, G._epa = counted, epa_seen
-    ws = G.make_gjk_workspace()
+    for m in counted_modules:
+        m.minkowski_core_xyz = counted
+    gjk_epa._epa = epa_seen
+    ws = gjk_epa.make_gjk_workspace()
     groups = collections.defaultdict(list)
     dev = 0.0
     for k in sel:
@@ -67,7 +74,7 @@ def main():
         sb = (table.codes[j], table.params[j], table.vrange[j, 0], table.vrange[j, 1])
         out = np.zeros(OUT_SIZE)
         calls[0], ran[0] = 0, False
-        G.gjk_epa_ws(sa, sb, table.verts, rot[k], tr[k], out, ws, 0.0)
+        gjk_epa.gjk_epa_ws(sa, sb, table.verts, rot[k], tr[k], out, ws, 0.0)
         dev = max(dev, abs(out[0] - ref["out"][k, 0]) / scale[k])
         feature = ""
         if BOX in (table.codes[i], table.codes[j]):

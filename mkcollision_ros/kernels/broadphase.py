@@ -43,12 +43,10 @@ import math
 
 import numpy as np
 
-from .constants import BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, P_MARGIN, PLANE, SPHERE
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, PLANE, PLANE_AXIS_TOL, P_MARGIN,
+                        SPHERE)
 from .jit import njit_kernel, njit_parallel, prange
 
-# planes whose world normal has off-axis components below this are axis-aligned
-# (dimensionless, components of a unit vector)
-PLANE_AXIS_TOL = 1e-12
 # grid cell edge = this x the mean largest AABB extent of the bodies (dimensionless)
 GRID_CELL_SCALE = 1.5
 # a body spanning more than this many cells is not put in the grid but tested against

@@ -22,7 +22,7 @@ N_PARAMS = 8
 P_GROUPS = 0     # convex: groups of its points, two rows each right after them in verts
                  # (0: none; mkcollision_ros.hull.support_groups, geometry._grouped_support)
 P_FAN_FACES = 1  # convex: its hull's faces, edges and vertices stored after its points
-P_FAN_EDGES = 2  # in verts for hullell.py (0 faces: none, and then maybe group rows;
+P_FAN_EDGES = 2  # in verts for pairs/ellipsoid_convex.py (0 faces: none, and then maybe group rows;
 P_FAN_VERTS = 3  # mkcollision_ros.hull.fan_rows has the layout)
 FAN_MAX_POINTS = 64  # hulls of at most this many kept points get their fan (fan_rows): the
                      # exact kernel walks every face, edge and vertex, which pays against
@@ -68,7 +68,7 @@ GJK_FLAT_TOL = 1e-9        # tetrahedra with 6|volume| <= tol * (longest edge)^3
 EPA_MAX_ITERS = 255        # added vertices
 EPA_MAX_FACES = 512        # face slots in the fixed polytope buffer
 EPA_REL_TOL = 1e-8         # stop when support gain < tol * scale (dimensionless)
-EPA_POLISH_TOL = 1e-3      # try Newton's method (gjk_epa._epa_polish) once the support gain
+EPA_POLISH_TOL = 1e-3      # try Newton's method (polish_newton._epa_polish) once the support gain
                            # < tol * scale, and once more at 0.01 * tol * scale if it gave up
 POLISH_STEP_DONE = 1e-6    # Newton's method and the crease search end once the step they
                            # would take next is below this (rad), at the point they are
@@ -79,15 +79,15 @@ EPA_POLISH_ITERS = 6       # its steps (support evaluations)
 EPA_POLISH_STEP = 0.05     # longest step it may take (rad)
 EPA_POLISH_CAP = 0.5       # its minimum is kept only if no direction farther than this
                            # from its normal can be deeper by EPA's faces (rad;
-                           # gjk_epa._polish_is_global)
+                           # certificates._polish_is_global)
 EPA_FACE_TOL = 1e-1         # test a box's face normal or a cylinder's axis within
                            # EPA_KINK_NEAR rad of EPA's best face normal for the minimum
-                           # (gjk_epa._face_polish) once the support gain < tol * scale
+                           # (polish_faces._face_polish) once the support gain < tol * scale
 EPA_FACE_EVALS = 3         # at most this many supports for those tests per pair, in EPA
-                           # and again in GJK on cores apart (gjk_epa._gjk)
+                           # and again in GJK on cores apart (gjk._gjk)
 EPA_FACE_CAP_MAX = 1.5     # largest EPA_POLISH_CAP for a minimum found so (rad); the cap
-                           # itself is proved by the test (gjk_epa._face_basin)
-EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (gjk_epa._kink_polish)
+                           # itself is proved by the test (certificates._face_basin)
+EPA_KINK_NEAR = 0.05       # try the polish along a cylinder's side (polish_crease._kink_polish)
                            # when the best face's normal n has |n . axis| below this (a
                            # box: for one of its axes only; near two, n is near a face
                            # normal; 0.15 gives 2% more steps on deep ellipsoid-box pairs)
@@ -100,7 +100,7 @@ EPA_KINK_CAP_BOX = 0.1     # and on a box edge's crease against an ellipsoid: at
                            # deep, the true one in a vertex's region 0.2 rad away (none
                            # at 0.1 or 0.05; 0.1 takes 18.1 steps, 0.05 18.8)
 EPA_VERTEX_CAP_MIN = 0.05  # least basin cap for a box vertex's minimum against an ellipsoid
-                           # (gjk_epa._vertex_cap): its angle to the box's nearest crease
+                           # (certificates._vertex_cap): its angle to the box's nearest crease
 
 # --- MPR ---------------------------------------------------------------------------------
 MPR_MAX_ITERS = 128        # portal refinements
@@ -124,3 +124,71 @@ GJK_ABS_TOL = 1e-12        # stop GJK when the distance bound gap < tol * scale 
 EPA_DEGEN_TOL = 1e-12      # flat Minkowski difference: volume/extent below tol * scale
 EPA_WITNESS_SHIFT = 1e-7   # witness fix-up: B pulled apart by depth + shift * scale (m/m)
 EPA_FAIL_GAP = 1e-4        # EPA caps hit: FAILED when upper - lower depth bound > tol * scale
+
+# --- broad phase (broadphase.py) --------------------------------------------------------
+PLANE_AXIS_TOL = 1e-12     # planes whose world normal has off-axis components below this
+                           # are axis-aligned (dimensionless, components of a unit vector)
+
+# --- pair kernels run before GJK (pairs/), in the canonical pair order ------------------
+# ellipsoid-box (pairs/ellipsoid_box.py)
+BE_POINT_ITERS = 40        # Newton steps on the Lagrange multiplier of a box vertex's
+                           # nearest point on the ellipsoid (from t = 0, kept in the root's
+                           # bracket; iterations)
+BE_EXACT = 1e-12           # a distance is exact when its closest points are this much
+                           # (times scale, dimensionless) farther apart than the separating
+                           # plane's gap, at most
+# ellipsoid-convex and cylinder-convex over a hull's normal fan (pairs/normal_fan.py,
+# pairs/ellipsoid_convex.py, pairs/cylinder_convex.py)
+HE_ITERS = 60              # cap of every 1-D root search (iterations)
+HE_BALL_ITERS = 32         # cap of the GJK steps in E's unit-ball frame
+                           # (ellipsoid_convex._unit_ball_test; cylinder_convex._cyl_gjk's
+                           # too; iterations)
+HE_BALL_TOL = 1e-9         # a point of B that far inside the unit ball proves overlap
+                           # (relative to the unit ball, dimensionless)
+HE_ROOT_RTOL = 1e-13       # a root's last Newton step (relative, dimensionless; the depth
+                           # needs ~1e-10)
+HE_DMIN_RTOL = 1e-12       # the search for phi's minimum between two poles gives up here
+                           # (relative, dimensionless)
+HE_SUPPORT_TOL = 1e-12     # a foot counts if B's support along -n is within this * scale
+                           # (dimensionless)
+HE_FOOT_SLACK = 1e-9       # normal_fan._plane_feet takes the right root for a point this
+                           # far outside the ellipse too (relative, dimensionless): at
+                           # touching the point lies on it, and rounding may put it just
+                           # outside
+HE_FAN_SLACK = 4e-10       # the edges' chord bound takes an edge's point on its faces'
+                           # planes, within hull._FAN_TOL (1e-10) of the points' extent
+                           # (<= 2 sqrt(3) radius_B), so it is lowered by this * scale
+                           # (dimensionless)
+# box-cylinder (pairs/box_cylinder.py)
+BC_MAX_LEVEL = 4           # halvings of an arc whose bound is too low (then EPA; iterations)
+BC_FEAT = 1e-9             # a box axis this close to normal to m: m is on its edge circle
+                           # (|cosine|, dimensionless)
+# the cylinder pairs (pairs/cylinder_common.py, cylinder_cylinder.py, cylinder_convex.py)
+CC_NEWTON_ITERS = 8        # Newton steps on a rim's angle (~4 taken on average; iterations)
+CC_HALF_TAN_MAX = 0.25     # longest step: tan of half its angle (dimensionless, ~0.49 rad);
+                           # far from the minimum F'' may mislead
+CC_HALF_TAN_DONE = 5e-5    # a step this short ends the search (tan of half its angle,
+                           # dimensionless, 1e-4 rad; the angle's error is then of its
+                           # square, and the ball's of its square)
+CC_RIMS = 2                # rims solved at most, deepest bound first (measured on the
+                           # benchmark's cases: 1 certifies 7% fewer pairs, 3 or 4 no more)
+CC_COVER_STEPS = 12        # greedy steps of cylinder_common._cover at most (each raises the
+                           # level covered; iterations)
+CC_CROSS_RINGS = 16        # rings of cylinder_cylinder._crossing_global at most (measured:
+                           # 8 certify 14 fewer of 965 crossings, 30 two more)
+HC_GJK_ITERS = 16          # steps of the 2-D GJK on a hull's shadow
+                           # (cylinder_convex.collide_cylinder_convex_ball, ~4 taken;
+                           # iterations)
+
+# --- contact manifold (manifold.py) and persistence (persistence.py) --------------------
+FACE_SIN = 0.05            # sin of the angle (~2.9 deg) within which a cap / side is a face
+                           # (dimensionless)
+FACE_SLACK = 0.05          # convex hull face tolerance, relative to the hull's diameter
+                           # (dimensionless)
+REF_COS = 0.9              # the reference face normal must be within ~26 deg of n (cosine,
+                           # dimensionless)
+# the reduction to max_contacts (persistence._reduce) treats as equal, and gives to the
+# older contact: depths within DEPTH_TIE x merge_distance (dimensionless), squared
+# distances and areas within REDUCE_TIE of the largest (relative, dimensionless)
+DEPTH_TIE = 1e-3
+REDUCE_TIE = 1e-3

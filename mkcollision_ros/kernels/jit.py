@@ -23,13 +23,15 @@ it makes the first compile longer and is kept to those.
 
 Cache location: numba's own cache notices when a kernel's file changes but not when a
 kernel it calls, in another file, changes — a stale cache would then run old code.  So
-the cache lives in a folder named after a hash of every kernel source file:
+the cache lives in a folder named after a hash of every kernel source file (every .py
+file under kernels/, sub-packages included, by sorted relative path):
 ``$XDG_CACHE_HOME/mkcollision_ros/numba-<hash>`` (default ``~/.cache``).  Any edit gives
 a fresh folder; an unchanged install reuses its compiled kernels.  Inside it, numba
 would file each source folder under a hash of its absolute path, so a second clone, a
 worktree or a copied install would compile everything again; ``SharedCacheLocator``
-files the package's kernels under the folder's name alone (``kernels``,
-``mkcollision_ros``), which is safe because the folder's hash covers the sources and
+files the package's kernels under the folder's path inside the package's parent alone
+(``mkcollision_ros/kernels``, ``mkcollision_ros/kernels/pairs``, ``mkcollision_ros``),
+which is safe because the folder's hash covers the sources and
 numba's own per-file stamp is a hash of the file's content.  Setting
 ``NUMBA_CACHE_DIR`` overrides all of this (numba's own layout, per path).
 
@@ -69,13 +71,25 @@ from numba.core import caching, cgutils, event, types
 from numba.extending import intrinsic
 
 
+def _kernel_sources(here):
+    """Every .py file under ``here`` (sub-packages included), as sorted paths relative
+    to it with '/' separators."""
+    found = []
+    for root, dirs, files in os.walk(here):
+        dirs[:] = [d for d in dirs if d != "__pycache__"]
+        for name in files:
+            if name.endswith(".py"):
+                rel = os.path.relpath(os.path.join(root, name), here)
+                found.append(rel.replace(os.sep, "/"))
+    return sorted(found)
+
+
 def _kernel_cache_dir():
     here = os.path.dirname(os.path.abspath(__file__))
     digest = hashlib.sha256(numba.__version__.encode())
-    for name in sorted(os.listdir(here)):
-        if name.endswith(".py"):
-            with open(os.path.join(here, name), "rb") as f:
-                digest.update(name.encode() + b"\0" + f.read())
+    for rel in _kernel_sources(here):
+        with open(os.path.join(here, *rel.split("/")), "rb") as f:
+            digest.update(rel.encode() + b"\0" + f.read())
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return os.path.join(base, "mkcollision_ros", f"numba-{digest.hexdigest()[:16]}")
 
@@ -85,12 +99,15 @@ _PACKAGE_DIR = os.path.realpath(os.path.dirname(os.path.dirname(os.path.abspath(
 
 class SharedCacheLocator(caching.UserProvidedCacheLocator):
     """numba's locator for ``config.CACHE_DIR``, for this package's files only, with
-    the subfolder named after the source's folder instead of a hash of its path (see
-    the module docstring); other files fall through to numba's own locators."""
+    the subfolder named after the source's folder inside the package's parent
+    (``mkcollision_ros/kernels``, ``mkcollision_ros/kernels/pairs``) instead of a hash
+    of its path (see the module docstring); other files fall through to numba's own
+    locators."""
 
     @classmethod
     def get_suitable_cache_subpath(cls, py_file):
-        return os.path.basename(os.path.dirname(os.path.abspath(py_file)))
+        folder = os.path.dirname(os.path.realpath(py_file))
+        return os.path.relpath(folder, os.path.dirname(_PACKAGE_DIR))
 
     @classmethod
     def from_function(cls, py_func, py_file):

@@ -24,9 +24,9 @@ Route of one pair in ``collide_world_ws`` (behind collide_world and collide_batc
 Pair table, method auto.  Shape codes in canonical order (constants.py): sphere 0,
 ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
   CF     a closed form: exact at any distance, no fallback.
-  G      gjk_epa.gjk_epa_ws: GJK on the cores (_gjk); EPA on the cores (_epa) when they
-         overlap; _caps_fallback when GJK stalls or EPA hits its caps (the pair's closed
-         form by analytic.collide_analytic, else mpr.mpr_ws).
+  G      gjk_epa.gjk_epa_ws: GJK on the cores (gjk._gjk); EPA on the cores (epa._epa)
+         when they overlap; _caps_fallback when GJK stalls or EPA hits its caps (the
+         pair's closed form by analytic.collide_analytic, else mpr.mpr_ws).
   G-pre  a pair kernel that gjk_epa_ws runs before GJK.  It answers with a certified core
          depth ("depth"), or with a plane proving the cores farther apart than
          max(cutoff, touching band), that gap a certified lower bound ("apart");
@@ -34,69 +34,82 @@ ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
   A margin grows the core (kernels/geometry.py) and changes no route but
   sphere-ellipsoid's here (and the ellipsoid methods', below).
 
-  pair                 first answer                        covers; then
-  sphere-sphere        analytic.sphere_world               CF
-  sphere-ellipsoid     analytic.sphere_world               CF if the ellipsoid has no
-                                                           margin; with one, G
-  sphere-box           analytic.sphere_world               CF
-  sphere-capsule       analytic.sphere_world               CF
-  sphere-cylinder      analytic.sphere_world               CF
-  sphere-cone          analytic.sphere_world               CF
-  sphere-convex        G                                   -
-  sphere-plane         _half_space_world                   CF
-  ellipsoid-ellipsoid  G                                   -
-  ellipsoid-box        G-pre boxell.ellipsoid_box_depth    depth at a face, the exact
-                                                           distance over a face, edge or
-                                                           vertex, or apart; then G
-  ellipsoid-capsule    G                                   -
-  ellipsoid-cylinder   G-pre cylcyl.ellipsoid_cylinder_depth  depth or apart; then G
-  ellipsoid-cone       G                                   -
-  ellipsoid-convex     G-pre hullell.ellipsoid_hull_depth  a hull with its fan stored:
-                                                           HE_EXACT, HE_APART; HE_UNPROVED:
-                                                           G, and once GJK finds the cores
-                                                           overlapping, this kernel again
-                                                           in place of EPA; no fan or
-                                                           HE_UNDECIDED: G
-  ellipsoid-plane      _half_space_world                   CF
-  box-box              _box_box: analytic.box_box_sat      cores overlapping: exact depth;
-                                                           apart by more than max(cutoff,
-                                                           touching band): SAT's lower
-                                                           bound; else G
-  box-capsule          analytic.closed_form_ordered        CF (analytic._box_capsule; out
-                                                           of order: collide_analytic)
-  box-cylinder         G-pre boxcyl.box_cylinder_depth     depth or apart; then G
-  box-cone             G                                   -
-  box-convex           G                                   -
-  box-plane            _half_space_world                   CF
-  capsule-capsule      analytic.capsule_capsule_world      CF
-  capsule-cylinder     G-pre cylcyl.segment_cylinder_depth  depth or apart; then G
-  capsule-cone         G                                   -
-  capsule-convex       G                                   -
-  capsule-plane        _half_space_world                   CF
-  cylinder-cylinder    G-pre cylcyl.cylinders_depth        depth or apart; then G
-  cylinder-cone        G                                   -
-  cylinder-convex      G-pre hullcyl.cylinder_hull_depth   as ellipsoid-convex, but no fan
-                                                           or HE_UNDECIDED: G-pre
-                                                           cylcyl.hull_cylinder_depth
-                                                           (depth or apart), then G
-  cylinder-plane       _half_space_world                   CF
-  cone-cone            G                                   -
-  cone-convex          G                                   -
-  cone-plane           _half_space_world                   CF
-  convex-convex        G                                   -
-  convex-plane         _half_space_world                   CF
-  plane-plane          none                                ST_NOT_RUN (every method)
+  pair                 first answer (kernels/pairs/ for a G-pre kernel or closed form)
+                       covers; then
+  sphere-sphere        sphere_shape.sphere_world                   CF
+  sphere-ellipsoid     sphere_shape.sphere_world                   CF if the ellipsoid has
+                                                                   no margin; with one, G
+  sphere-box           sphere_shape.sphere_world                   CF
+  sphere-capsule       sphere_shape.sphere_world                   CF
+  sphere-cylinder      sphere_shape.sphere_world                   CF
+  sphere-cone          sphere_shape.sphere_world                   CF
+  sphere-convex        G                                           -
+  sphere-plane         _half_space_world                           CF
+  ellipsoid-ellipsoid  G                                           -
+  ellipsoid-box        G-pre ellipsoid_box.collide_ellipsoid_box   depth at a face, the
+                                                                   exact distance over a
+                                                                   face, edge or vertex,
+                                                                   or apart; then G
+  ellipsoid-capsule    G                                           -
+  ellipsoid-cylinder   G-pre ellipsoid_cylinder.                   depth or apart; then G
+                         collide_ellipsoid_cylinder
+  ellipsoid-cone       G                                           -
+  ellipsoid-convex     G-pre ellipsoid_convex.                     a hull with its fan
+                         collide_ellipsoid_convex                  stored: HE_EXACT,
+                                                                   HE_APART; HE_UNPROVED:
+                                                                   G, and once GJK finds
+                                                                   the cores overlapping,
+                                                                   this kernel again in
+                                                                   place of EPA; no fan or
+                                                                   HE_UNDECIDED: G
+  ellipsoid-plane      _half_space_world                           CF
+  box-box              _box_box: box_box.collide_box_box           cores overlapping: exact
+                                                                   depth; apart by more
+                                                                   than max(cutoff,
+                                                                   touching band): SAT's
+                                                                   lower bound; else G
+  box-capsule          analytic.closed_form_ordered                CF (box_capsule.
+                                                                   collide_box_capsule; out
+                                                                   of order:
+                                                                   collide_analytic)
+  box-cylinder         G-pre box_cylinder.collide_box_cylinder     depth or apart; then G
+  box-cone             G                                           -
+  box-convex           G                                           -
+  box-plane            _half_space_world                           CF
+  capsule-capsule      capsule_capsule.capsule_capsule_world       CF
+  capsule-cylinder     G-pre capsule_cylinder.                     depth or apart; then G
+                         collide_capsule_cylinder
+  capsule-cone         G                                           -
+  capsule-convex       G                                           -
+  capsule-plane        _half_space_world                           CF
+  cylinder-cylinder    G-pre cylinder_cylinder.                    depth or apart; then G
+                         collide_cylinder_cylinder
+  cylinder-cone        G                                           -
+  cylinder-convex      G-pre cylinder_convex.                      as ellipsoid-convex, but
+                         collide_cylinder_convex                   no fan or HE_UNDECIDED:
+                                                                   G-pre cylinder_convex.
+                                                                   collide_cylinder_convex_
+                                                                   ball (depth or apart),
+                                                                   then G
+  cylinder-plane       _half_space_world                           CF
+  cone-cone            G                                           -
+  cone-convex          G                                           -
+  cone-plane           _half_space_world                           CF
+  convex-convex        G                                           -
+  convex-plane         _half_space_world                           CF
+  plane-plane          none                                        ST_NOT_RUN (every method)
 A traced GJK/EPA workspace with its iterate option set skips the G-pre kernels
 (gjk_epa.py, "Trace").  The row's method code is M_ANALYTIC for a closed form (SAT's
 included), M_GJK_EPA for G and its G-pre kernels, the requested code after step 1.
 
-Inside G, by pair (the predicates in gjk_epa.py): GJK on cores apart tries _face_polish
-(_face_pair), _kink_polish near a crease (_has_crease), Newton's method
-(_gjk_smooth_polish: _hull_polish first for _hull_side) for _gjk_newton_pair; EPA tries
-_cylinders_crossing (two cylinders), _face_polish (_epa_face_pair), _crossing_test
-(_crossing_pair), _kink_polish (_searched_crease) and _epa_polish (_smooth_pair, two
-cylinders, _ellipsoid_box), each minimum kept under _polish_is_global; _witness_by_gjk
-where EPA's witness points leave its face.  A flat core difference through the origin
+Inside G, by pair (the predicates in polish_pairs.py): GJK on cores apart tries
+_face_polish (_face_pair; polish_faces.py), _kink_polish near a crease (_has_crease;
+polish_crease.py), Newton's method (_gjk_smooth_polish: _hull_polish first for
+_hull_side; polish_newton.py) for _gjk_newton_pair; EPA tries _cylinders_crossing (two
+cylinders), _face_polish (_epa_face_pair), _crossing_test (_crossing_pair), _kink_polish
+(_searched_crease) and _epa_polish (_smooth_pair, two cylinders, _ellipsoid_box), each
+minimum kept under certificates._polish_is_global; gjk._witness_by_gjk where EPA's
+witness points leave its face.  A flat core difference through the origin
 (_grow_to_tetra) has core depth 0.  ST_FAILED: GJK's or EPA's cap hit with a wide gap
 (for EPA, when its lower bound does not prove the contact and _caps_fallback's MPR finds
 none), or a non-finite result.
@@ -121,8 +134,7 @@ import math
 
 import numpy as np
 
-from .analytic import (box_box_sat, capsule_capsule_world, classify, closed_form_ordered,
-                       collide_analytic, has_point_form, sphere_world)
+from .analytic import closed_form_ordered, collide_analytic
 from .constants import (BOX, CAPSULE, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT,
                         M_ELLIPSOID_SAMPLED, M_GJK_EPA, M_MPR, NP_CHUNK, OUT_DIST, OUT_ITERS,
                         OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE, P_MARGIN, P_RADIUS,
@@ -130,10 +142,15 @@ from .constants import (BOX, CAPSULE, M_ANALYTIC, M_AUTO, M_ELLIPSOID_EXACT,
 from .ellipsoid import ellipsoid_exact, ellipsoid_sampled
 from .geometry import (borrow_args, quat_entries, quat_rotate_xyz, quat_to_matrix_into,
                        shape_scale, support_full_xyz)
-from .gjk_epa import borrow_gjk_workspace, gjk_epa_ws, make_gjk_workspace
+from .gjk_epa import gjk_epa_ws
+from .gjk_epa_workspace import borrow_gjk_workspace, make_gjk_workspace
 from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_inline, njit_kernel,
                   njit_parallel, prange)
 from .mpr import MPR_WS_ROWS, mpr_ws
+from .pairs.box_box import collide_box_box
+from .pairs.capsule_capsule import capsule_capsule_world
+from .pairs.core_distance import classify
+from .pairs.sphere_shape import has_point_form, sphere_world
 
 # subdivision level passed to ellipsoid_sampled by the dispatcher
 ELLIPSOID_SAMPLED_SUBDIV = 3
@@ -143,7 +160,7 @@ ELLIPSOID_SAMPLED_SUBDIV = 3
 # (_POSE_ROWS + MPR_WS_ROWS, 3) = world rotations ra (rows 0-2), rb (3-5), the relative
 # pose r_ab (6-8) / t_ab (9), the swapped pose r_ba (10-12) / t_ba (13), then mpr_ws's
 # scratch; rows float64 (2, OUT_SIZE) = result rows row and tmp; gjk =
-# gjk_epa.make_gjk_workspace().
+# gjk_epa_workspace.make_gjk_workspace().
 _POSE_ROWS = 14
 
 
@@ -187,7 +204,7 @@ def _box_box(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     axis separates by more than the cutoff (and the touching band) keep SAT's lower
     bound, as GJK would stop there too (gjk_epa.gjk_epa_ws); the rest get GJK's exact
     distance."""
-    st = box_box_sat(sa, sb, r_ab, t_ab, out)
+    st = collide_box_box(sa, sb, r_ab, t_ab, out)
     if st != ST_NOT_RUN:
         return st
     if out[OUT_DIST] > max(cutoff, TOUCH_TOL * shape_scale(sa, sb)):
@@ -322,9 +339,9 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     margin), straight in the world frame: the plane's normal n goes to the world, -n
     into the shape's frame for its support point p, and the signed distance is n . p -
     (d + m), p taken from the plane body's origin.  The same closed form as
-    analytic._plane_any, without the relative pose and the way back from A's frame,
+    plane_shape.collide_shape_plane, without the relative pose and the way back from A's frame,
     which take about a third of such a pair's time (results within 7.4e-15 * scale of
-    analytic._plane_any's).  A sphere's
+    plane_shape.collide_shape_plane's).  A sphere's
     support point needs no rotation and a capsule's only its axis (the rotation's third
     column), so those two skip the way into the body frame and back.  Writes ``out``
     (world; normal from A to B: -n when the shape is A, n when it is B; the point on
@@ -394,7 +411,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     normal along the centre line, pa and pb on the two spheres.  A shape against a
     half-space, by method auto or analytic, is solved in the world frame
     (_half_space_world), and so are a sphere against a shape with a sphere-* closed
-    form (analytic.sphere_world) and two capsules (analytic.capsule_capsule_world):
+    form (sphere_shape.sphere_world) and two capsules (capsule_capsule.capsule_capsule_world):
     for these the relative pose costs as much as the closed form itself."""
     if code_a != PLANE and code_b != PLANE:
         dx, dy, dz = pos_b[0] - pos_a[0], pos_b[1] - pos_a[1], pos_b[2] - pos_a[2]

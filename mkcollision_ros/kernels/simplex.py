@@ -1,5 +1,5 @@
 """The closest point to the origin of a simplex of up to four points (GJK's
-sub-problem), for gjk_epa's GJK and EPA and for hullell's GJK in an ellipsoid's unit-ball
+sub-problem), for gjk_epa's GJK and EPA and for ellipsoid_convex's GJK in an ellipsoid's unit-ball
 frame."""
 import math
 

@@ -3,7 +3,7 @@ iterations when a caller hands them a scratch buffer larger than they need.
 
 A trace region is a run of rows ``[base, buf.shape[0])`` of a float64 (rows, 3) scratch
 buffer, after the rows the kernel works in (mpr_ws: MPR_WS_ROWS; gjk_epa_ws: fs rows
-after gjk_epa._FS_ROWS).  A buffer with fewer than TR_HEADER_ROWS rows after those
+after gjk_epa_workspace._FS_ROWS).  A buffer with fewer than TR_HEADER_ROWS rows after those
 records nothing.  With the options row zero the kernel's results are bit-identical with
 and without a trace region (the records are only written, never read).
 

@@ -1,6 +1,6 @@
 """An ellipsoid and a box in closed form, before GJK and EPA: the cores' depth at a box
 face certified by a ball, or the cores' exact distance over a face, an edge or a vertex,
-or a face plane that proves them apart (gjk_epa.gjk_epa_ws calls ellipsoid_box_depth
+or a face plane that proves them apart (gjk_epa.gjk_epa_ws calls collide_ellipsoid_box
 first for such a pair; where it decides nothing it returns 0 and GJK and EPA run as for
 any pair).
 
@@ -23,14 +23,14 @@ The outcomes, each exact:
      axes), -h is their distance exactly: the foot is a point of the box, -h from p, and
      no two points of K and the box are closer than the slab between the plane and its
      parallel through p.  p and the foot are the closest points (the rows GJK's face test
-     returns on cores apart, gjk_epa._face_polish).  Else -h is a bound and a separating
-     plane, which gjk_epa_ws takes in contacts mode (as cylcyl's) once it clears
+     returns on cores apart, polish_faces._face_polish).  Else -h is a bound and a separating
+     plane, which gjk_epa_ws takes in contacts mode (as cylinder_common's) once it clears
      ``stop``; below that, 3.
   2. The least h is > 0 and a ball inside K about a point q lies as deep in the box as
      h: K - box holds that ball less the box, which holds the ball of radius rho + (q's
      depth in the box) about the origin, so the depth is at least that and at most h
-     (gjk_epa._ball_certified's argument).  The ball: the largest one inside K that
-     touches it at p (gjk_epa._rolling_ball): radius rho = c_min^2 / sqrt(S_kk) - r
+     (certificates._ball_certified's argument).  The ball: the largest one inside K that
+     touches it at p (certificates._rolling_ball): radius rho = c_min^2 / sqrt(S_kk) - r
      (the normal there is x_k, so |D m| = sqrt(S_kk)), centre q = p + s rho x_k.  q lies
      h - rho under the face, so the ball certifies h where the other faces keep their
      distance from q: e_i - |q_i| >= h - rho for the other two axes, and the opposite
@@ -43,10 +43,10 @@ The outcomes, each exact:
      the gap of a separating plane, a lower bound on the distance wherever it is > 0;
      K's point p along -m and the box's point q nearest it bound the distance from
      above by |p - q|.  m is found by Newton's method on the edge's normal angle (the
-     2-D problem in the plane normal to the edge, as cylcyl.ellipsoid_cylinder_depth),
+     2-D problem in the plane normal to the edge, as ellipsoid_cylinder.collide_ellipsoid_cylinder),
      or from the ellipsoid's point nearest the vertex (Newton's method on the Lagrange
      multiplier), and the distance is taken only where the two bounds meet within
-     _BE_EXACT * scale, whichever feature or root was tried.
+     BE_EXACT * scale, whichever feature or root was tried.
   4. Else nothing: GJK and EPA (the cores overlapping at an edge's or a vertex's
      minimum, or at a face whose ball the box's sides cut short).
 
@@ -62,23 +62,17 @@ import math
 
 import numpy as np
 
-from .constants import ELLIPSOID, EPA_REL_TOL, P_ROLL
-from .cylcyl import CC_NEWTON_ITERS, _apart_out, _certified_out, _frame, gap_newton_step
-from .geometry import borrow_pose, meet
-from .jit import borrow, njit_inline, njit_kernel
-
-
-BE_POINT_ITERS = 40     # Newton steps on the Lagrange multiplier of a box vertex's nearest
-                        # point on the ellipsoid (from t = 0, kept in the root's bracket)
-_BE_EXACT = 1e-12       # a distance is exact when its closest points are this much (times
-                        # scale) farther apart than the separating plane's gap, at most
+from ..constants import BE_EXACT, BE_POINT_ITERS, CC_NEWTON_ITERS, ELLIPSOID, EPA_REL_TOL, P_ROLL
+from ..geometry import borrow_pose, meet
+from ..jit import borrow, njit_inline, njit_kernel
+from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step
 
 
 @njit_inline
 def face_room(e, k, x, y, z):
     """The least gap from the point (x, y, z) (the box's frame) to the sides of the box
     faces normal to axis k, e_i - |x_i| over the two other axes i (half extents e):
-    the radius of the largest disc about its foot inside the face (gjk_epa._face_test)."""
+    the radius of the largest disc about its foot inside the face (polish_faces._face_test)."""
     if k == 0:
         return min(e[1] - abs(y), e[2] - abs(z))
     if k == 1:
@@ -103,7 +97,7 @@ def _exact_apart(res, side, r_ab, t_ab, g, mx, my, mz, px, py, pz, qx, qy, qz):
     """res = [-g, n, pa, pb] for cores exactly g apart along the unit m (the box's frame,
     from the box to the core), p the core's closest point and q the box's (the box's
     frame), moved by halves of the remainder so that pb - pa == g n exactly (meet, as
-    GJK's and EPA's witnesses); returns -g.  g must be > 0 (cylcyl._apart_out's rows)."""
+    GJK's and EPA's witnesses); returns -g.  g must be > 0 (cylinder_common._apart_out's rows)."""
     nx, ny, nz = _normal_of(side, r_ab, mx, my, mz)
     _apart_out(res, g, nx, ny, nz, side, r_ab, t_ab, px, py, pz, qx, qy, qz)
     for c in range(3):
@@ -148,10 +142,10 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     """The cores' distance over the box edge along x_i at (x_j, x_k) = (sj e_j, sk e_k),
     the core beyond it: the unit m (box's frame, in the plane of x_j and x_k, between
     the faces' normals sj x_j and sk x_k) maximising the gap g(m) = min over the core of
-    m . y less the edge's m . x (Newton's method on m's angle, as cylcyl's
-    ellipsoid_cylinder_depth maximises its g), the core's point p along -m and q, its
+    m . y less the edge's m . x (Newton's method on m's angle, as cylinder_common's
+    collide_ellipsoid_cylinder maximises its g), the core's point p along -m and q, its
     foot on the edge.  Returns (status, g, m (3), p (3), q (3)): status 1 when g is the
-    distance (p within the edge's length and |p - q| within _BE_EXACT * scale of g: the
+    distance (p within the edge's length and |p - q| within BE_EXACT * scale of g: the
     plane normal to m at the edge separates by g and p, q are g apart), 2 or -1 when p
     lies past the edge's end at +e_i or -e_i, 3 when an iterate's g, a separating
     plane's gap (m between the faces' normals), already exceeds ``stop`` (then q is the
@@ -196,7 +190,7 @@ def _edge_distance(c, S, roll, box, i, j, k, sj, sk, scale, stop):
     if p_i < -box[i]:
         return -1, g, mx, my, mz, px, py, pz, qx, qy, qz
     dj, dk = _axis_pick(j, px, py, pz) - qj, _axis_pick(k, px, py, pz) - qk
-    ok = math.sqrt(dj * dj + dk * dk) - g <= _BE_EXACT * scale
+    ok = math.sqrt(dj * dj + dk * dk) - g <= BE_EXACT * scale
     return (1 if ok else 0), g, mx, my, mz, px, py, pz, qx, qy, qz
 
 
@@ -210,7 +204,7 @@ def _vertex_distance(c, S, roll, ell, axes, box, sx, sy, sz, scale):
     must lie in v's normal cone (sx m_0, sy m_1, sz m_2 >= 0: v is then the box's
     support along m), the core's point p along -m and the gap g(m) as in
     _edge_distance.  Returns (exact, g, m (3), p (3), v (3)), exact when g > 0 and |p -
-    v| is within _BE_EXACT * scale of g (whichever root was found: g is a separating
+    v| is within BE_EXACT * scale of g (whichever root was found: g is a separating
     plane's gap and |p - v| a distance between the two cores)."""
     ux, uy, uz, vx, vy, vz, kx, ky, kz = axes
     qx, qy, qz = sx * box[0], sy * box[1], sz * box[2]
@@ -256,7 +250,7 @@ def _vertex_distance(c, S, roll, ell, axes, box, sx, sy, sz, scale):
     px, py, pz, rs = _core_point(c, S, roll, mx, my, mz)
     g = mx * (c[0] - qx) + my * (c[1] - qy) + mz * (c[2] - qz) - rs + roll
     ex, ey, ez = px - qx, py - qy, pz - qz
-    exact = g > 0.0 and math.sqrt(ex * ex + ey * ey + ez * ez) - g <= _BE_EXACT * scale
+    exact = g > 0.0 and math.sqrt(ex * ex + ey * ey + ez * ez) - g <= BE_EXACT * scale
     return exact, g, mx, my, mz, px, py, pz, qx, qy, qz
 
 
@@ -354,7 +348,7 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
 
 
 @njit_kernel
-def ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, stop, res):
+def collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res):
     """The outcomes of the module notes for an ellipsoid and a box (either order; B's
     pose r_ab, t_ab in A's frame; ``stop`` (m, may be inf): a face plane proving the
     cores farther apart than this ends the call with that bound, as GJK's ``stop``).
@@ -365,7 +359,7 @@ def ellipsoid_box_depth(sa, sb, r_ab, t_ab, scale, stop, res):
     * (-g <= 0, True): the cores are exactly g apart, res = [-g, n, pa, pb] with pa, pb
       the closest points (pb - pa == g n).
     * (-g < 0, False): the cores are at least g apart, n normal to a separating plane,
-      pa and pb points of the two cores (cylcyl._apart_out).
+      pa and pb points of the two cores (cylinder_common._apart_out).
     * (0, False): nothing decided, res untouched."""
     # owner-less views: no reference counting on them (geometry.borrow_args)
     sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)

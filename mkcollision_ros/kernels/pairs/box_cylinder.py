@@ -45,7 +45,7 @@ cylinder lies at least -f(m) below the origin along m: the cores are at least th
 apart.  So the first test, f along the line of centres, and the candidates, which
 hold the box's face normals and the pole as a separating axis test would, end most
 pairs apart with that gap as the distance bound (_apart_out; gjk_epa.gjk_epa_ws takes
-it in contacts mode when it clears the touching band, as cylcyl's planes).  Measured
+it in contacts mode when it clears the touching band, as cylinder_common's planes).  Measured
 (pure Python, bench/dev/deep_pairs.py's 2,000 box-cylinder cases, both orders): 925 of the
 961 pairs apart end here (of those, GJK would end about half at its first support and
 take 4-8 steps on the rest); no bound lies above GJK's exact distance by more than
@@ -86,12 +86,9 @@ axis-aligned scenes keep EPA's handling of face-to-face contacts.
 """
 import math
 
-from .constants import BOX, EPA_REL_TOL
-from .geometry import borrow_pose, meet
-from .jit import borrow, njit_inline, njit_kernel
-
-BC_MAX_LEVEL = 4        # halvings of an arc whose bound is too low (then EPA)
-_BC_FEAT = 1e-9         # a box axis this close to normal to m: m is on its edge circle
+from ..constants import BC_FEAT, BC_MAX_LEVEL, BOX, EPA_REL_TOL
+from ..geometry import borrow_pose, meet
+from ..jit import borrow, njit_inline, njit_kernel
 
 
 @njit_inline
@@ -428,7 +425,7 @@ def _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, gap, mx, my, mz):
 
 
 @njit_kernel
-def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
+def collide_box_cylinder(sa, sb, r_ab, t_ab, scale, scratch, res):
     """The depth of a box and a cylinder (shape tuples sa, sb, one of each, B's pose
     r_ab, t_ab in A's frame) whose cores overlap, as the module doc says.  ``scratch``
     float64 (>= BC_MAX_LEVEL + 8, 3).  On success writes res[:10] = [depth, n (3),
@@ -436,7 +433,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
     pb - pa == -depth * n) as _epa does, and returns the depth (> 0).  Where the line
     of centres or a candidate direction has f < 0, the cores are apart: res = [-gap,
     ...] (_apart_out) and returns -gap, which gjk_epa.gjk_epa_ws takes as GJK's
-    distance bound in contacts mode (as cylcyl's planes).  Returns 0, res untouched,
+    distance bound in contacts mode (as cylinder_common's planes).  Returns 0, res untouched,
     when the answer is neither certified nor apart."""
     # owner-less views: no reference counting on them (geometry.borrow_args)
     sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
@@ -494,7 +491,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
     if bt == 1 or bt == 4:
         # a rim point against a box face, or (type 4) a box edge
         s = math.sqrt(mx * mx + my * my)
-        if not (s > _BC_FEAT and abs(mz) > _BC_FEAT):
+        if not (s > BC_FEAT and abs(mz) > BC_FEAT):
             return 0.0                  # a cap or a side line, not a point: EPA
         cpx, cpy, cpz = -r * mx / s, -r * my / s, (-hc if mz > 0.0 else hc)
         bpx, bpy, bpz = cpx + d * mx, cpy + d * my, cpz + d * mz
@@ -504,7 +501,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
         ii = -1
         for q in range(3):
             am = A[q, 0] * mx + A[q, 1] * my + A[q, 2] * mz
-            if abs(am) <= _BC_FEAT:
+            if abs(am) <= BC_FEAT:
                 if ii >= 0:
                     return 0.0
                 ii = q
@@ -522,7 +519,7 @@ def box_cylinder_depth(sa, sb, r_ab, t_ab, scale, scratch, res):
             if ii < 0:
                 return 0.0
             ax, ay, az = A[ii, 0], A[ii, 1], A[ii, 2]
-            if not abs(az) < 1.0 - _BC_FEAT:
+            if not abs(az) < 1.0 - BC_FEAT:
                 return 0.0
             # edge point v + lam a against side-line point -r m + mu z:
             # lam a - mu z = (d - r) m - v

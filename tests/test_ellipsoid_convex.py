@@ -1,8 +1,9 @@
 """The normal fan of a small hull (hull.fan_rows) and the exact ellipsoid-hull depth over
-it (kernels/hullell.py), against GJK/EPA on the same points without the fan (a table
-built with prune=False stores none) on seeded random pairs, both orders, with margins.
-coal checks the same path in test_gjk_epa.py (test_against_coal_random: its ellipsoid-
-convex pairs go through hullell whenever the cores overlap)."""
+it (kernels/pairs/ellipsoid_convex.py), against GJK/EPA on the same points without the
+fan (a table built with prune=False stores none) on seeded random pairs, both orders,
+with margins.  coal checks the same path in test_gjk_epa.py (test_against_coal_random:
+its ellipsoid-convex pairs go through collide_ellipsoid_convex whenever the cores
+overlap)."""
 import numpy as np
 import pytest
 
@@ -10,8 +11,8 @@ from bench.common import pair_cases, relative_poses
 from mkcollision_ros.hull import FAN_MAX_POINTS, fan_rows
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
-from mkcollision_ros.kernels.hullell import (HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED,
-                                              ellipsoid_hull_depth)
+from mkcollision_ros.kernels.pairs.ellipsoid_convex import collide_ellipsoid_convex
+from mkcollision_ros.kernels.pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table, point_count, shape_row
 
@@ -93,10 +94,10 @@ def _pair_runs(n, seed, margin, swap):
         depth = -out[C.OUT_DIST]
         res[:] = np.nan
         args = (sa, sb, fan.verts, R[0], T[0], scale)
-        first = ellipsoid_hull_depth(*args, False, 0.0, rows, roots, res)
+        first = collide_ellipsoid_convex(*args, False, 0.0, rows, roots, res)
         got = first
         if first == HE_UNPROVED and depth > roll + 2 * margin + 1e-9 * scale:
-            got = ellipsoid_hull_depth(*args, True, 0.0, rows, roots, res)
+            got = collide_ellipsoid_convex(*args, True, 0.0, rows, roots, res)
         full = res[0] + roll + 2 * margin           # both margins
         runs.append((depth, roll, first, got == HE_EXACT, full, res[1:4].copy(),
                      out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
@@ -213,8 +214,8 @@ def _first_call(box_lo, box_hi, swap, stop):
     scale = fan.params[0, C.P_RADIUS] + fan.params[1, C.P_RADIUS]
     out, res = np.zeros(C.OUT_SIZE), np.zeros(10)
     gjk_epa(qa, qb, plain.verts, R[0], T[0], out)
-    got = ellipsoid_hull_depth(sa, sb, fan.verts, R[0], T[0], scale, False, stop,
-                               np.zeros((HE_ROWS, 3)), np.zeros(8), res)
+    got = collide_ellipsoid_convex(sa, sb, fan.verts, R[0], T[0], scale, False, stop,
+                                   np.zeros((HE_ROWS, 3)), np.zeros(8), res)
     return got, res, out, scale, fan.params[1 if swap else 0, C.P_ROLL]
 
 

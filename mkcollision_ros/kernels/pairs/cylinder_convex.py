@@ -1,8 +1,14 @@
-"""A cylinder and a small convex hull in closed form and 1-D root searches, before GJK
-and EPA: the exact depth of the cylinder C and the hull B over B's normal fan, as
-hullell.py does for an ellipsoid (gjk_epa.gjk_epa_ws calls cylinder_hull_depth first for
-such a pair when the hull has its fan stored; where it decides nothing, cylcyl's
-hull_cylinder_depth, then GJK and EPA run as for any pair).
+"""A cylinder and a convex hull before GJK and EPA, by two kernels:
+  * ``collide_cylinder_convex``: a small hull with its fan stored, in closed form and
+    1-D root searches: the exact depth of the cylinder C and the hull B over B's
+    normal fan, as ellipsoid_convex.py does for an ellipsoid (the fan's helpers:
+    normal_fan.py), by the notes below;
+  * ``collide_cylinder_convex_ball``: any hull, the core depth certified by the ball of
+    cylinder_common.py from the hull's lowest vertex under each cap and its point
+    nearest the cylinder's axis (its docstring).
+gjk_epa.gjk_epa_ws calls ``collide_cylinder_convex`` first for such a pair when the hull
+has its fan stored; where it decides nothing, or with no fan,
+``collide_cylinder_convex_ball``; then GJK and EPA run as for any pair.
 
 The problem, in C's frame (axis z, radius R, half-height H): the depth is min over unit
 n of f(n) = h_C(n) + h_B(-n), with h_C(n) = R |n_xy| + H |n_z|.  C's normal fan is its
@@ -17,8 +23,8 @@ a critical point of f restricted to it:
     is R - |v_xy| (counts if B's support along -n is attained at v);
   * the equator crossing an edge's arc: n = +-(z x e) / |z x e|, the one in the arc;
   * a rim's hemisphere in an edge's arc: there C is the rim's disk, a flat ellipsoid
-    (squared semi-axes R^2, R^2, 0) centred at +-H z, and f on the arc is hullell's edge
-    problem for it (hullell._plane_feet: the disk projected along the edge is an ellipse
+    (squared semi-axes R^2, R^2, 0) centred at +-H z, and f on the arc is ellipsoid_convex's edge
+    problem for it (normal_fan._plane_feet: the disk projected along the edge is an ellipse
     of semi-axes R and R |e_z|); a root counts if its n lies in the arc and in that
     hemisphere;
   * a rim's hemisphere in a vertex's cone: none.  There C's support is a rim point r
@@ -30,8 +36,8 @@ a critical point of f restricted to it:
 Pruning (U the least value found so far, from the faces' and the poles'): an edge's arc
 is skipped where f's tangent planes at its ends, the subgradients (s_i - v) . n with s_i
 C's support point at n_i, clear U over the chord between the ends (closed form from the
-faces' values; within the fan's tolerance, hullell.HE_FAN_SLACK), else over the arc
-itself (hullell._planes_on_arc).  An arc reaches a hemisphere only through an end in it
+faces' values; within the fan's tolerance, constants.HE_FAN_SLACK), else over the arc
+itself (normal_fan._planes_on_arc).  An arc reaches a hemisphere only through an end in it
 (it is shorter than pi), so each edge solves at most the rims its ends' normals face;
 where the arc crosses the equator at w, a rim's part runs from its end to w and is
 bounded likewise by the planes there (at w C's support point on that rim, R w + s H z).
@@ -59,7 +65,7 @@ rim a near-segment or a near-circle) and non-converging searches decide nothing
 (HE_UNDECIDED): GJK and EPA take the pair.
 
 The answer is for C and B's core (no rolling radius: a cylinder's core is itself):
-res = [U, n, pa, pb] as hullell's, the witnesses exact for the feature pair found (a
+res = [U, n, pa, pb] as ellipsoid_convex's, the witnesses exact for the feature pair found (a
 rim point and the point U back along n; a vertex and the side's point level with it;
 an edge's point on the side's line; a cap's point over B's lowest vertex).
 
@@ -76,13 +82,15 @@ import math
 
 import numpy as np
 
-from .constants import CYLINDER, FAN_MAX_POINTS, GJK_FLAT_TOL
-from .geometry import borrow_args
-from .hullell import (HE_APART, HE_BALL_ITERS, HE_EXACT, HE_FACES, HE_FAN_SLACK, HE_MAX_FACES,
-                      HE_SUPPORT_TOL, HE_UNDECIDED, HE_UNPROVED, HE_V, _in_arc,
-                      _plane_feet, _planes_on_arc, _vertex_top, face_apart_out, fan_run,
-                      fan_stored, hull_pose, least_offset, plane_foot)
-from .jit import borrow, njit_inline, njit_kernel
+from ..constants import (CYLINDER, EPA_REL_TOL, FAN_MAX_POINTS, GJK_FLAT_TOL, HC_GJK_ITERS,
+                         HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL)
+from ..geometry import borrow_args, cylinder_inradius
+from ..jit import borrow, njit_inline, njit_kernel
+from .cylinder_common import (_cap_normal, _cap_test, _certified_out, _cover, _frame, _past_side,
+                              _side_normal)
+from .normal_fan import (HE_APART, HE_EXACT, HE_FACES, HE_MAX_FACES, HE_UNDECIDED, HE_UNPROVED,
+                         HE_V, _in_arc, _plane_feet, _planes_on_arc, _vertex_top, face_apart_out,
+                         fan_run, fan_stored, hull_pose, least_offset, plane_foot)
 
 
 @njit_inline
@@ -123,7 +131,7 @@ def _out(res, side, r_ab, t_ab, h, nx, ny, nz, ax, ay, az, bx, by, bz):
 @njit_inline
 def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, big_r,
                big_h, gap):
-    """hullell.face_apart_out for C."""
+    """normal_fan.face_apart_out for C."""
     sx, sy, sz = _cyl_point(big_r, big_h, -mx, -my, -mz)
     face_apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, sx, sy,
                    sz, gap)
@@ -268,11 +276,11 @@ def _cyl_gjk(V, fl, nf, nvx, big_r, big_h, t0, t1, t2, need):
 
 
 @njit_kernel
-def cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
-                        res):
+def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
+                            res):
     """The exact depth of a cylinder and a hull's core with its fan stored (either
     order; B's pose r_ab, t_ab in A's frame), by the module notes; arguments and outcomes
-    as hullell.ellipsoid_hull_depth's (``rows`` >= hullell.HE_ROWS rows)."""
+    as ellipsoid_convex.collide_ellipsoid_convex's (``rows`` >= normal_fan.HE_ROWS rows)."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     rows, roots, res = borrow(rows), borrow(roots), borrow(res)
     side = 0 if sa[0] == CYLINDER else 1
@@ -293,7 +301,7 @@ def cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, r
     pts = verts[v0:v0 + vn]
     tol = HE_SUPPORT_TOL * scale
     # C's centre c in the hull's frame and its offset below each face's plane (as
-    # hullell): all positive proves the overlap; the least is tried as a separating plane
+    # ellipsoid_convex): all positive proves the overlap; the least is tried as a separating plane
     omin, fmin = least_offset(verts, fl, fnr, nf, r00, r01, r02, r10, r11, r12, r20, r21,
                               r22, t0, t1, t2, Q)
     if not omin > 0.0:
@@ -309,7 +317,7 @@ def cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, r
     inside = omin > 0.0
     # the vertices in C's frame, the lowest and the highest, and L, the depth in C of
     # the deepest one inside (A - B holds C - v, so the depth is at least that); row
-    # indices as uint64, as hullell's (no wraparound checks: ~3% of the kernel's time)
+    # indices as uint64, as ellipsoid_convex's (no wraparound checks: ~3% of the kernel's time)
     zlo, zhi = np.inf, -np.inf
     ilo = ihi = np.uint64(0)
     L = 0.0
@@ -535,3 +543,186 @@ def cylinder_hull_depth(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, r
     _out(res, side, r_ab, t_ab, U, nx, ny, nz, ax, ay, az, ax - U * nx, ay - U * ny,
          az - U * nz)
     return HE_EXACT
+
+
+@njit_inline
+def _shadow_closest(ax, ay, bx, by):
+    """The point of the segment [a, b] (2-D) nearest the origin, as (t, x, y) with
+    t in [0, 1] its parameter from a."""
+    ex, ey = bx - ax, by - ay
+    ee = ex * ex + ey * ey
+    t = 0.0
+    if ee > 0.0:
+        t = min(1.0, max(0.0, -(ax * ex + ay * ey) / ee))
+    return t, ax + t * ex, ay + t * ey
+
+
+@njit_kernel
+def collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res):
+    """The core depth (> 0) of a convex hull and a cylinder (either order), certified by
+    the ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus
+    the gap (< 0) when
+    a plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when
+    neither.  The hull's points are its vertices (verts, body frame) and their convex
+    combinations; the candidates are hull points in the cylinder's frame:
+      - for each cap, the hull's lowest vertex p under the cap's plane: h along the
+        cap's normal is its gap to the plane, exactly, and a gap <= 0 proves the cores
+        apart; p's ball certifies h, or where the side cuts it short, _cover's bound
+        from the segments p to the vertex nearest the axis, to the highest vertex and
+        to their midpoint;
+      - against the side, q = the hull's point nearest the cylinder's axis, i.e. the
+        point of the hull's shadow on the plane square to the axis nearest the axis's
+        foot: GJK in two dimensions over the shadow (its support is the hull's along a
+        horizontal direction, one pass over the vertices; the simplex at most a
+        segment, whose two vertices are hull points, so q lifts to a hull point).  At
+        its end, the support pass along -m (m = q_xy / |q_xy|) gives h along the side
+        normal at q, R - min over the hull of m . x, and q's ball certifies it where the
+        caps leave the ball whole, else _cover's bound from the segments q to the
+        hull's lowest and highest vertices and to the last support point; a pass whose
+        minimum lies beyond R proves the cores apart.  The shadow holding the axis's
+        foot (a triangle of the simplex around it) leaves no side candidate.
+    Nothing depends on the 2-D GJK's converging: any hull point's ball is a lower bound
+    and any support pass an upper one; only their meeting within EPA_REL_TOL * scale
+    certifies.  The side is what a hull's corner or edge pressed into a cylinder takes;
+    a cylinder's rim pressed into a hull's face (its normal the face's) is left to GJK
+    and EPA, as no hull faces are kept.
+    Measured on bench/dev/deep_pairs.py's 2,000 cylinder-convex cases (this function run
+    with NUMBA_DISABLE_JIT, GJK + EPA the reference): 240 of the 953 pairs whose
+    cores overlap by more than 1e-3 * scale certified (183 by a ball, 170 of them by the
+    side and 13 by a cap, the rest by _cover; and 17 pairs overlapping less), depths
+    within 9.3e-9 * scale of EPA's (its nearest face), normals within 2.2e-4 rad; 856
+    of the 2,000 proved apart, 457 of them pairs whose bounding spheres overlap (those
+    the batch kernel hands to GJK)."""
+    # owner-less views: no reference counting on them (geometry.borrow_args)
+    sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
+    res = borrow(res)
+    side = 0 if sa[0] != CYLINDER else 1
+    hull = sa if side == 0 else sb
+    cyl = sb[1] if side == 0 else sa[1]
+    big_r, big_h = cyl[0], cyl[1]
+    cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz = _frame(side, r_ab, t_ab)
+    pts = verts[hull[2]:hull[2] + hull[3]]
+    nv = pts.shape[0]
+    if nv == 0:
+        return 0.0
+    tol = EPA_REL_TOL * scale
+    # one pass: the lowest and highest vertices and the one nearest the axis
+    zlo, zhi, rmin = math.inf, -math.inf, math.inf
+    ilo = ihi = inear = 0
+    for i in range(nv):
+        x, y, z = _hull_point(pts, i, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+        if z < zlo:
+            zlo, ilo = z, i
+        if z > zhi:
+            zhi, ihi = z, i
+        rr = x * x + y * y
+        if rr < rmin:
+            rmin, inear = rr, i
+    for si in range(2):
+        s = 2.0 * si - 1.0
+        i = ilo if s > 0.0 else ihi
+        px, py, pz = _hull_point(pts, i, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+        d = _cap_test(res, side, r_ab, t_ab, s, big_r, big_h, tol, px, py, pz)
+        if d != 0.0:
+            return d
+        # its ball cut short by the side: the cover (_cover) from p to the vertex
+        # nearest the axis, to the highest (along -s z) and to their midpoint
+        ax, ay, az = _hull_point(pts, inear, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+        tx, ty, tz = _hull_point(pts, ihi if s > 0.0 else ilo, cx, cy, cz, ux, uy, uz, vx,
+                                 vy, vz, kx, ky, kz)
+        h = big_h - s * pz
+        if _cover(False, s, px, py, pz, big_r, big_h, ax - px, ay - py, az - pz, tx - px,
+                  ty - py, tz - pz, 0.5 * (ax + tx) - px, 0.5 * (ay + ty) - py,
+                  0.5 * (az + tz) - pz) >= h - tol:
+            nx, ny, nz = _cap_normal(side, r_ab, s)
+            _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, px, py, pz)
+            return h
+    # the side: GJK on the shadow, the simplex [a, b] (b used when two), q on it
+    ax, ay, az = _hull_point(pts, inear, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+    bx = by = bz = 0.0
+    two = False
+    qx, qy, qz = ax, ay, az
+    for _ in range(HC_GJK_ITERS):
+        qq = qx * qx + qy * qy
+        if not qq > 0.0:
+            return 0.0
+        # the hull's support along -q_xy (min over the vertices of q_xy . x)
+        dx = qx * ux + qy * uy
+        dy = qx * vx + qy * vy
+        dz = qx * kx + qy * ky
+        low = math.inf
+        j = 0
+        for i in range(nv):
+            val = pts[i, 0] * dx + pts[i, 1] * dy + pts[i, 2] * dz
+            if val < low:
+                low, j = val, i
+        q = math.sqrt(qq)
+        g = (qx * cx + qy * cy + low) / q       # min over the hull of m . x
+        wx, wy, wz = _hull_point(pts, j, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
+        if g > big_r:
+            # the hull lies beyond the side's tangent plane along m: cores apart
+            return _past_side(res, g, side, r_ab, t_ab, qx / q, qy / q, big_r, big_h,
+                              wx, wy, wz)
+        if q - g <= tol:
+            # q's support plane: q is the shadow's nearest point; h = R - g along m
+            h = big_r - g
+            ball = cylinder_inradius(big_r, big_h, qx, qy, qz)
+            if not (ball > 0.0 and ball >= h - tol):
+                # cut short by a cap: the cover (_cover) from q to the hull's lowest
+                # and highest vertices and to w
+                lx, ly, lz = _hull_point(pts, ilo, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx,
+                                         ky, kz)
+                tx, ty, tz = _hull_point(pts, ihi, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx,
+                                         ky, kz)
+                ball = _cover(True, 0.0, qx, qy, qz, big_r, big_h, lx - qx, ly - qy,
+                              lz - qz, tx - qx, ty - qy, tz - qz, wx - qx, wy - qy, wz - qz)
+            if not (ball > 0.0 and ball >= h - tol):
+                return 0.0
+            nx, ny, nz = _side_normal(side, r_ab, qx / q, qy / q)
+            _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, qx, qy, qz)
+            return h
+        if not two:
+            t, sx, sy = _shadow_closest(ax, ay, wx, wy)
+            if t >= 1.0:
+                ax, ay, az = wx, wy, wz
+            elif t > 0.0:
+                bx, by, bz = wx, wy, wz
+                two = True
+        else:
+            # the origin inside the triangle a, b, w: the shadow holds the axis's foot
+            c1 = (bx - ax) * (-ay) - (by - ay) * (-ax)
+            c2 = (wx - bx) * (-by) - (wy - by) * (-bx)
+            c3 = (ax - wx) * (-wy) - (ay - wy) * (-wx)
+            if (c1 >= 0.0 and c2 >= 0.0 and c3 >= 0.0) or (c1 <= 0.0 and c2 <= 0.0
+                                                            and c3 <= 0.0):
+                return 0.0
+            t, sx, sy = _shadow_closest(ax, ay, wx, wy)
+            t2, sx2, sy2 = _shadow_closest(bx, by, wx, wy)
+            if sx2 * sx2 + sy2 * sy2 < sx * sx + sy * sy:
+                # the edge b w: a <- b
+                t, sx, sy = t2, sx2, sy2
+                ax, ay, az = bx, by, bz
+            if t >= 1.0:
+                ax, ay, az = wx, wy, wz
+                two = False
+            elif t > 0.0:
+                bx, by, bz = wx, wy, wz
+            else:
+                two = False
+        if not sx * sx + sy * sy < qq:
+            return 0.0              # no progress (round-off): no side candidate
+        if two:
+            ex, ey, ez = bx - ax, by - ay, bz - az
+            qx, qy, qz = ax + t * ex, ay + t * ey, az + t * ez
+        else:
+            qx, qy, qz = ax, ay, az
+    return 0.0
+
+
+@njit_inline
+def _hull_point(pts, i, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz):
+    """Vertex i of pts (the hull's frame) in the cylinder's frame (c, u, v, k: the
+    hull's centre and axes there, as _frame gives them)."""
+    p0, p1, p2 = pts[i, 0], pts[i, 1], pts[i, 2]
+    return (cx + p0 * ux + p1 * vx + p2 * kx, cy + p0 * uy + p1 * vy + p2 * ky,
+            cz + p0 * uz + p1 * vz + p2 * kz)

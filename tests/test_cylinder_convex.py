@@ -1,16 +1,17 @@
-"""The exact cylinder-hull depth over the hull's normal fan (kernels/hullcyl.py): against
-closed forms on hand-placed pairs, and against GJK/EPA on the same points without the
-fan (a table built with prune=False stores none) on seeded random pairs, both orders,
-with margins.  coal checks the same path in test_gjk_epa.py (test_against_coal_random:
-its cylinder-convex pairs go through hullcyl whenever the cores overlap)."""
+"""The exact cylinder-hull depth over the hull's normal fan (kernels/pairs/cylinder_convex.py,
+collide_cylinder_convex): against closed forms on hand-placed pairs, and against GJK/EPA
+on the same points without the fan (a table built with prune=False stores none) on
+seeded random pairs, both orders, with margins.  coal checks the same path in
+test_gjk_epa.py (test_against_coal_random: its cylinder-convex pairs go through
+collide_cylinder_convex whenever the cores overlap)."""
 import numpy as np
 import pytest
 
 from bench.common import pair_cases, relative_poses
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
-from mkcollision_ros.kernels.hullcyl import cylinder_hull_depth
-from mkcollision_ros.kernels.hullell import HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED
+from mkcollision_ros.kernels.pairs.cylinder_convex import collide_cylinder_convex
+from mkcollision_ros.kernels.pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table
 
@@ -36,8 +37,8 @@ def _hand(points, rot, tr, swap=False, stop=0.0, overlap=False):
     if swap:
         sc, sh, rot, tr = sh, sc, rot.T, -rot.T @ tr
     res = np.full(10, np.nan)
-    got = cylinder_hull_depth(sc, sh, t.verts, rot, tr, 3.0, overlap, stop,
-                              np.zeros((HE_ROWS, 3)), np.zeros(8), res)
+    got = collide_cylinder_convex(sc, sh, t.verts, rot, tr, 3.0, overlap, stop,
+                                  np.zeros((HE_ROWS, 3)), np.zeros(8), res)
     return got, res
 
 
@@ -162,10 +163,10 @@ def _pair_runs(n, seed, margin, swap):
         depth = -out[C.OUT_DIST]
         res[:] = np.nan
         args = (sa, sb, fan.verts, R[0], T[0], scale)
-        first = cylinder_hull_depth(*args, False, 0.0, rows, roots, res)
+        first = collide_cylinder_convex(*args, False, 0.0, rows, roots, res)
         got = first
         if first == HE_UNPROVED and depth > 2 * margin + 1e-9 * scale:
-            got = cylinder_hull_depth(*args, True, 0.0, rows, roots, res)
+            got = collide_cylinder_convex(*args, True, 0.0, rows, roots, res)
         runs.append((depth, first, got == HE_EXACT, res[0] + 2 * margin, res[1:4].copy(),
                      out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
                      np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale,

@@ -110,7 +110,7 @@ SECTIONS = (
         "poses far apart, near, small inside big, coincident centres, and touching at "
         "round-off.  Each call through the batch kernel one pair at a time (timed), "
         "the parallel batch compared bit for bit, every 1,000th pair also through the "
-        "public API.  The checks and tolerances are in bench/fuzz.py's docstring; "
+        "public API.  The checks and tolerances are in mkcollision_ros/fuzzing.py's docstring; "
         "\"other failures\" are pairs failing a check other than FAILED, NaN or a "
         "disagreement.  A call over the 50 ms bound is timed again and counts only if "
         "it is slow again.  Goal: no FAILED, no NaN, no failure, no disagreement.  A "

@@ -47,6 +47,7 @@ import numpy as np
 from .kernels.constants import ST_NOT_RUN
 from .kernels.manifold import MAX_MANIFOLD
 from .kernels.persistence import EV_BEGAN, EV_ENDED, EV_PERSISTED, arbiter_step
+from .rotations import quat_to_matrix
 from .scene import KEY_BASE
 
 BEGAN = "began"
@@ -109,22 +110,6 @@ class Events:
     def concat(cls, *parts):
         """The events of ``parts`` one after the other."""
         return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in cls.__slots__))
-
-
-def quat_matrices(quat_xyzw):
-    """Rotation matrices float64 (N, 3, 3) of unit quaternions (N, 4) xyzw."""
-    x, y, z, w = (quat_xyzw[:, i] for i in range(4))
-    r = np.empty((len(quat_xyzw), 3, 3))
-    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    r[:, 0, 1] = 2 * (x * y - z * w)
-    r[:, 0, 2] = 2 * (x * z + y * w)
-    r[:, 1, 0] = 2 * (x * y + z * w)
-    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    r[:, 1, 2] = 2 * (y * z - x * w)
-    r[:, 2, 0] = 2 * (x * z - y * w)
-    r[:, 2, 1] = 2 * (y * z + x * w)
-    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return r
 
 
 class ArbiterSet:
@@ -297,7 +282,7 @@ class ArbiterSet:
         if pos_w is None:
             return dict(self._con)
         a, b = self._con["body_a"], self._con["body_b"]
-        rot = quat_matrices(np.asarray(quat_w, np.float64))
+        rot = quat_to_matrix(np.asarray(quat_w, np.float64))
         pos_w = np.asarray(pos_w, np.float64)
         pa = np.einsum("cij,cj->ci", rot[a], self.c_la) + pos_w[a]
         pb = np.einsum("cij,cj->ci", rot[b], self.c_lb) + pos_w[b]

@@ -35,35 +35,14 @@ from typing import NamedTuple
 import numpy as np
 import yaml
 
+from .rotations import quat_axis_angle, quat_rotate
+
 REST = 0.002         # m, depth of a resting contact
 G = 9.81             # m/s^2
 KEY_DT = 0.002       # s, spacing of a script's keyframes (pose(t) interpolates them)
 SCENE_NAMES = ("bowling", "dominoes", "marbles", "stack", "swarm")
 NODE_PARAMS = {"frame_id": "world", "contact_margin": 0.001, "max_contacts": 4,
                "publish_markers": True, "marker_normal_length": 0.1}
-
-
-# -- quaternions (xyzw), batched -------------------------------------------------------
-def quat_axis_angle(axis, angle):
-    """Quaternions (..., 4) of rotations by ``angle`` (rad, (...)) about unit ``axis``
-    (..., 3)."""
-    axis = np.asarray(axis, np.float64)
-    half = 0.5 * np.asarray(angle, np.float64)
-    return np.concatenate([axis * np.sin(half)[..., None], np.cos(half)[..., None]], -1)
-
-
-def quat_rotate(q, v):
-    """Vectors v (..., 3) rotated by quat_xyzw q (..., 4)."""
-    u, w = q[..., :3], q[..., 3:]
-    t = 2.0 * _cross(u, v)
-    return v + w * t + _cross(u, t)
-
-
-def _cross(a, b):
-    """Cross product of (..., 3) arrays (broadcasting; np.cross is slow on small ones)."""
-    ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
-    bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], -1)
 
 
 def _y_turn(angle):

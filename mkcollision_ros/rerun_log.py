@@ -75,10 +75,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .arbiters import EV_PERSISTED, KIND_NAMES, quat_matrices
+from .arbiters import EV_PERSISTED, KIND_NAMES
 from .kernels.constants import METHOD_NAMES, P_RADIUS
 from .meshes import shape_mesh
 from .results import Status
+from .rotations import quat_to_matrix
 
 STATUS_NAMES = tuple(s.name.lower() for s in sorted(Status))
 
@@ -222,7 +223,7 @@ def _groups(scene):
             dims[g].append((float(s["radius"]) + m, float(s["height"]) + 2.0 * m))
         else:
             first, count = table.vrange[slot]
-            r = quat_matrices(scene.orientations[slot:slot + 1])[0]
+            r = quat_to_matrix(scene.orientations[slot:slot + 1])[0]
             near = r.T @ (centre - scene.positions[slot])   # the scene's centre, body frame
             v, f = shape_mesh(s, table.verts[first:first + count], plane_size=side,
                               plane_near=near)
@@ -502,7 +503,7 @@ class _Recorder:
                 fields["quaternions"] = q
                 if name == "capsules":
                     # rerun places a capsule's end at the translation, extending along +z
-                    axis = quat_matrices(q)[:, :, 2]
+                    axis = quat_to_matrix(q)[:, :, 2]
                     half = 0.5 * g.dims[name][keep][:, 1:2]
                     fields["translations"] = p - half * axis
                 else:
@@ -529,7 +530,7 @@ class _Recorder:
             rec.log("world/bodies/mesh_names", rr.Points3D.from_fields(
                 labels=[n for n, k in zip(g.names["meshes"], keep) if k], radii=0.0))
         if moved:
-            r = quat_matrices(q)
+            r = quat_to_matrix(q)
             world = np.matmul(g.mesh_local[keep], r.transpose(0, 2, 1)) + p[:, None, :]
             fields["vertex_positions"] = world[g.mesh_valid[keep]]
             if fresh:

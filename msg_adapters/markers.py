@@ -23,6 +23,7 @@ from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
 from mkcollision_ros.meshes import PLANE_SIZE, icosphere, support_points
+from mkcollision_ros.rotations import quat_from_z, quat_mul, quat_rotate
 
 FREE = ColorRGBA(r=0.6, g=0.6, b=0.6, a=0.5)
 TOUCHING = ColorRGBA(r=1.0, g=0.6, b=0.0, a=0.7)
@@ -94,9 +95,9 @@ class MarkerPainter:
             # the patch's centre on the plane, its z along the normal (body frame)
             c = (float(body.shape["offset"]) / np.linalg.norm(body.shape["normal"])
                  - 0.5 * PLANE_THICKNESS) * n
-            q_n = _quat_from_z(n)
-            q = _quat_mul(quat, q_n)
-            c = pos + _rotate(quat, c)
+            q_n = quat_from_z(n)
+            q = quat_mul(quat, q_n)
+            c = pos + quat_rotate(quat, c)
         else:
             c, q = pos, quat
         m.pose.position.x, m.pose.position.y, m.pose.position.z = (float(x) for x in c)
@@ -167,31 +168,6 @@ class MarkerPainter:
                 m.points = _points(np.stack([pos, ends], axis=1).reshape(-1, 3))
             out.markers.append(m)
         return out
-
-
-def _quat_mul(a, b):
-    x1, y1, z1, w1 = a
-    x2, y2, z2, w2 = b
-    return np.array([w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-                     w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2])
-
-
-def _rotate(q, v):
-    x, y, z, w = q
-    u = np.array([x, y, z])
-    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
-
-
-def _quat_from_z(n):
-    """The unit quaternion xyzw turning +z onto the unit vector ``n``."""
-    c = float(n[2])
-    if c < -1.0 + 1e-12:
-        return np.array([1.0, 0.0, 0.0, 0.0])
-    axis = np.cross([0.0, 0.0, 1.0], n)
-    q = np.array([axis[0], axis[1], axis[2], 1.0 + c])
-    return q / np.linalg.norm(q)
 
 
 def contacts_to_marker_array(contacts, stamp=None, frame_id="world", normal_length=0.2,

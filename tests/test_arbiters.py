@@ -1,7 +1,7 @@
 """ArbiterSet on hand-made contacts: ids, merging, drift, reduction, staleness, events."""
 import numpy as np
 
-from mkcollision_ros.arbiters import ArbiterSet, quat_matrices
+from mkcollision_ros.arbiters import ArbiterSet
 
 IDENT = np.array([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0]])
 UP = np.array([0.0, 0.0, 1.0])
@@ -20,11 +20,6 @@ def make(**kw):
     args = dict(merge_distance=0.02, drift_threshold=0.01, max_contacts=4, stale_steps=3)
     args.update(kw)
     return ArbiterSet(**args)
-
-
-def test_quat_matrices_match_rotation():
-    q = np.array([[0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)]])
-    assert np.allclose(quat_matrices(q)[0] @ [1.0, 0, 0], [0, 1.0, 0])
 
 
 def test_merge_keeps_id_and_new_contacts_get_new_ids():

@@ -7,7 +7,7 @@ collide_cylinder_convex whenever the cores overlap)."""
 import numpy as np
 import pytest
 
-from bench.common import pair_cases, relative_poses
+from mkcollision_ros.cases import pair_cases, relative_poses
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
 from mkcollision_ros.kernels.pairs.cylinder_convex import collide_cylinder_convex

@@ -7,7 +7,7 @@ overlap)."""
 import numpy as np
 import pytest
 
-from bench.common import pair_cases, relative_poses
+from mkcollision_ros.cases import pair_cases, relative_poses
 from mkcollision_ros.hull import FAN_MAX_POINTS, fan_rows
 from mkcollision_ros.kernels import constants as C
 from mkcollision_ros.kernels.gjk_epa import gjk_epa

@@ -1,4 +1,4 @@
-"""A seeded slice of the narrow-phase fuzzer (bench/fuzz.py), its saved cases
+"""A seeded slice of the narrow-phase fuzzer (mkcollision_ros/fuzzing.py), its saved cases
 (tests/fuzz_cases.json) and the two bugs it found, each with a test that names it.
 
 The slice runs every method on random pairs of every shape type (sizes 1 mm - 100 m,
@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import oracles as O
-from bench import fuzz as F
+from mkcollision_ros import fuzzing as F
 from mkcollision_ros import collide
 from mkcollision_ros.kernels.constants import OUT_DIST, P_RADIUS
 from mkcollision_ros.results import Status

@@ -10,7 +10,7 @@ import urllib.request
 import numpy as np
 import pytest
 
-from mkcollision_ros.arbiters import quat_matrices
+from mkcollision_ros.rotations import quat_to_matrix
 from mkcollision_ros.meshes import shape_mesh
 from mkcollision_ros.pipeline import Pipeline
 from mkcollision_ros.render import free_port
@@ -169,7 +169,7 @@ def test_every_body_is_its_shape_in_slot_order(recorded):
     np.testing.assert_allclose(box["Boxes3D:half_sizes"], [[0.5] * 3])
     # a capsule's end at its translation, the capsule along +z of its rotation
     cap = shown(rec["/world/bodies/capsules"], 1)
-    axis = quat_matrices(quat[4:5])[0, :, 2]
+    axis = quat_to_matrix(quat[4:5])[0, :, 2]
     np.testing.assert_allclose(np.array(cap["Capsules3D:translations"][0]) + 0.4 * axis,
                                pos[4], atol=1e-6)
     assert cap["Capsules3D:lengths"] == [pytest.approx(0.8)]
@@ -185,7 +185,7 @@ def test_every_body_is_its_shape_in_slot_order(recorded):
     for i in (6, 7):
         s = BODIES[i]["shape"]
         local, _ = shape_mesh(s, ROCK if s["type"] == "convex" else None)
-        want.append(local @ quat_matrices(quat[i:i + 1])[0].T + pos[i])
+        want.append(local @ quat_to_matrix(quat[i:i + 1])[0].T + pos[i])
     want = np.concatenate(want)
     assert v.shape == (4 + len(want), 3)
     np.testing.assert_allclose(v[4:], want, atol=1e-5 * max(1.0, np.abs(want).max()))

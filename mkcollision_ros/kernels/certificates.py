@@ -16,7 +16,7 @@ import numpy as np
 from .constants import (BOX, CYLINDER, ELLIPSOID, EPA_FACE_CAP_MAX, EPA_POLISH_CAP,
                         EPA_VERTEX_CAP_MIN, P_ROLL)
 from .geometry import borrow_pose
-from .gjk_epa_workspace import _T3, _dot
+from .gjk_epa_workspace import _T_MIN_D, _T_MIN_W, _T_MIN_WA, _T_MIN_WB, _dot
 from .jit import njit_inline, njit_kernel
 from .pairs.sphere_shape import _point_box, _point_cylinder
 from .polish_pairs import _axis_of, _in_side_frame
@@ -199,7 +199,7 @@ def _pending_bound(sa, sb, r_ab, t_ab, fs, tol):
     """The bound EPA holds a minimum a polish stored (ws t3 rows 15-18: n, w, a, b) to:
     h(n) - tol, which no face of its polytope outside the basin cap may undercut
     (_polish_is_global), or -inf when _ball_certified proves it the depth."""
-    n, w, a, b = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    n, w, a, b = fs[_T_MIN_D], fs[_T_MIN_W], fs[_T_MIN_WA], fs[_T_MIN_WB]
     hmin = _dot(n, w) - tol
     if _ball_certified(sa, sb, r_ab, t_ab, hmin, n[0], n[1], n[2], a[0], a[1], a[2], b[0],
                        b[1], b[2]):
@@ -222,7 +222,7 @@ def _face_basin(rin, h):
     cap of _polish_is_global's plane test (capped at EPA_FACE_CAP_MAX, inside the pi /
     2 that test needs).  0 when h <= 0 (GJK on cores apart needs no cap).  Against a
     single point the bound is exact along the tilt toward the face's nearest side, so
-    the cap is the whole basin there (tests/test_gjk_epa.py checks both).
+    the cap is the whole basin there (tests/test_polish_faces.py checks both).
 
     The same holds on a convex hull's face (rin: the foot's least distance to the
     triangle's edges); EPA does not test hull faces with it, as the test costs more

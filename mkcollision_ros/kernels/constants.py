@@ -53,6 +53,17 @@ METHOD_NAMES = ("auto", "gjk_epa", "mpr", "analytic", "ellipsoid_exact", "ellips
 # tolerance is reported as TOUCHING, below it PENETRATING, above it SEPARATED.
 TOUCH_TOL = 1e-9
 
+# --- what a pair kernel run before GJK decided (pairs/; gjk_epa.gjk_epa_ws) -----------
+# Each such kernel fills res (10,) = [h, normal (3), point on A (3), point on B (3)] in
+# A's frame, on the cores (the shapes shrunk by their inflation radii), and returns one of:
+PRE_UNDECIDED = -1         # nothing proved: GJK and EPA answer the pair
+PRE_UNPROVED = 0           # (the fan kernels) no proof that the cores overlap: GJK runs, and
+                           # once it finds them overlapping the kernel runs again in EPA's place
+PRE_EXACT = 1              # res holds the cores' certified depth h > 0 or their exact distance
+                           # -h >= 0, with the normal from A to B and the witness points
+PRE_APART = 2              # a plane proves the cores farther apart than the caller's ``stop``
+                           # (m): -h is that bound, res's points lie on the two cores
+
 # --- batch kernel ------------------------------------------------------------------------
 NP_CHUNK = 128             # fewest pairs per block of collide_batch (jit.n_blocks)
 

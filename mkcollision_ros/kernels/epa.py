@@ -64,7 +64,10 @@ from .constants import (BOX, CAPSULE, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FA
                         SPHERE)
 from .geometry import borrow_args, meet, minkowski_core_xyz
 from .gjk_epa_workspace import (_CAND, _FD, _FN, _FS_ROWS, _IA, _IC, _IE, _IF, _IH, _IS, _L3,
-                                _NVMAX, _RES, _T3, _V, _VA, _VB, _VD, _W, _WA, _WB, _dot,
+                                _NVMAX, _RES, _T_BEST_DIR, _T_BEST_W, _T_BEST_WA, _T_BEST_WB,
+                                _T_CIN, _T_D, _T_FACE_CAP, _T_MIN_D, _T_PAT_D, _T_PAT_E1,
+                                _T_PAT_E2, _T_PAT_W, _T_PAT_WA, _T_PAT_WB, _T_UD, _T_UWA, _T_W,
+                                _T_WA, _T_WB, _V, _VA, _VB, _VD, _W, _WA, _WB, _dot,
                                 _take_polished, borrow_gjk_workspace)
 from .jit import borrow, njit_inline, njit_kernel
 from .polish_crease import _kink_polish
@@ -85,7 +88,7 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n):
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     W, WA, WB = ws[0][_W:_W + 4], ws[0][_WA:_WA + 4], ws[0][_WB:_WB + 4]
-    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
+    d, wa, wb, w = ws[0][_T_D], ws[0][_T_WA], ws[0][_T_WB], ws[0][_T_W]
     cand = ws[0][_CAND:_CAND + 6]
     tol = EPA_DEGEN_TOL * scale
     while n < 4:
@@ -126,7 +129,7 @@ def _grow_to_tetra(sa, sb, verts, r_ab, t_ab, scale, ws, n):
             cand[1, 0], cand[1, 1], cand[1, 2] = -nx, -ny, -nz
             ndir = 2
         best = -1.0
-        bw, bwa, bwb, bdir = ws[0][_T3 + 15], ws[0][_T3 + 16], ws[0][_T3 + 17], ws[0][_T3 + 18]
+        bw, bwa, bwb, bdir = ws[0][_T_BEST_W], ws[0][_T_BEST_WA], ws[0][_T_BEST_WB], ws[0][_T_BEST_DIR]
         for c in range(3):
             bdir[c] = 0.0
         for k in range(ndir):
@@ -212,8 +215,8 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, scale, ud, uwa, ub, ws):
     value ``ub``; updates ud and uwa (A's support point) in place, returns the value."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ud, uwa, ws = borrow(ud), borrow(uwa), borrow_gjk_workspace(ws)
-    d, wa, wb, w = ws[0][_T3 + 19], ws[0][_T3 + 20], ws[0][_T3 + 21], ws[0][_T3 + 22]
-    e1, e2 = ws[0][_T3 + 23], ws[0][_T3 + 24]
+    d, wa, wb, w = ws[0][_T_PAT_D], ws[0][_T_PAT_WA], ws[0][_T_PAT_WB], ws[0][_T_PAT_W]
+    e1, e2 = ws[0][_T_PAT_E1], ws[0][_T_PAT_E2]
     step = 1e-2
     it = 0
     while step > 1e-10 and it < 4 * EPA_MAX_ITERS:
@@ -305,7 +308,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     free = ivf[3 * _IC + EPA_MAX_FACES:3 * _IC + 2 * EPA_MAX_FACES]
     h_from = ivf[3 * _IH:3 * _IH + _NVMAX]
     h_to = ivf[3 * _IH + _NVMAX:3 * _IH + 2 * _NVMAX]
-    cin = ws[0][_T3 + 12]
+    cin = ws[0][_T_CIN]
     for c in range(3):
         cin[c] = 0.0
     for i in range(4):
@@ -353,7 +356,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                         if F[g, (eg + 1) % 3] != a:
                             return 0, False, np.inf, False
     nfree = 0
-    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
+    d, wa, wb, w = ws[0][_T_D], ws[0][_T_WA], ws[0][_T_WB], ws[0][_T_W]
     tol = EPA_REL_TOL * scale
     polished = False
     # Newton's method (see _smooth_pair for which pairs try it): at a gain of
@@ -376,7 +379,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     converged = False
     # best upper bound on the depth: min over evaluated unit directions of h(d)
     ub = np.inf
-    ud, uwa = ws[0][_T3 + 13], ws[0][_T3 + 14]
+    ud, uwa = ws[0][_T_UD], ws[0][_T_UWA]
     for c in range(3):
         ud[c] = 0.0
         uwa[c] = 0.0
@@ -403,7 +406,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
         cross_left = 0
         if pend:
             p_planes = True
-            p_cap = fs[_T3 + 3, 0]
+            p_cap = fs[_T_FACE_CAP, 0]
             p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
     trace_on = fs.shape[0] >= _FS_ROWS + TR_HEADER_ROWS
     while True:
@@ -459,11 +462,11 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                 # of the polytope can reach deeper outside that cap
                 pend = True
                 p_planes = True
-                p_cap = fs[_T3 + 3, 0]
+                p_cap = fs[_T_FACE_CAP, 0]
                 p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
                 p_fail = -1
         if pend:
-            p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h, p_planes,
+            p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T_MIN_D], p_h, p_planes,
                                        p_cap, p_fail)
             if p_fail < 0:
                 _take_polished(fs, d, w, wa, wb)
@@ -491,7 +494,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                 n_pol += abs(k_pol)
                 cap = _polish_cap(kc, capsule, box)
                 if k_pol > 0 and vtx:
-                    cap = _vertex_cap(sa, sb, r_ab, fs[_T3 + 15])
+                    cap = _vertex_cap(sa, sb, r_ab, fs[_T_MIN_D])
                 if k_pol > 0 and not cap > 0.0:
                     # a vertex's minimum near a crease: kept only if a ball proves it
                     if _pending_bound(sa, sb, r_ab, t_ab, fs, tol) == -np.inf:
@@ -504,7 +507,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                     p_planes = kc >= 0 or creaseless or vtx
                     p_cap = cap
                     p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
-                    p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T3 + 15], p_h,
+                    p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T_MIN_D], p_h,
                                                p_planes, p_cap, -1)
                     if p_fail < 0:
                         _take_polished(fs, d, w, wa, wb)

@@ -56,8 +56,9 @@ import math
 from .constants import (EPA_DEGEN_TOL, EPA_FACE_EVALS, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
                         GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL)
 from .geometry import borrow_args, meet, minkowski_core_xyz
-from .gjk_epa_workspace import (_FS_ROWS, _L3, _LAM, _LAMP, _PK, _PN, _PW, _T3, _VOL, _VV, _W, _WA,
-                                _WAP, _WB, _WBP, _WP, _dot, borrow_gjk_workspace)
+from .gjk_epa_workspace import (_FS_ROWS, _L3, _LAM, _LAMP, _PK, _PN, _PW, _T_D, _T_MIN_D,
+                                _T_MIN_W, _T_SHIFT, _T_VPREV, _T_W, _T_WA, _T_WB, _VOL, _VV, _W,
+                                _WA, _WAP, _WB, _WBP, _WP, _dot, borrow_gjk_workspace)
 from .jit import borrow, njit_inline, njit_kernel
 from .polish_crease import _kink_polish
 from .polish_faces import _face_polish, _hull_polish
@@ -105,7 +106,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     fs, fv = ws[0], ws[1]
     W, WA, WB = fs[_W:_W + 4], fs[_WA:_WA + 4], fs[_WB:_WB + 4]
     lam, v = fv[_LAM:_LAM + 4], fv[_VV:_VV + 3]
-    d, wa, wb, w = ws[0][_T3 + 8], ws[0][_T3 + 9], ws[0][_T3 + 10], ws[0][_T3 + 11]
+    d, wa, wb, w = ws[0][_T_D], ws[0][_T_WA], ws[0][_T_WB], ws[0][_T_W]
     for q in range(4):
         lam[q] = 0.0
     tn = math.sqrt(_dot(t_ab, t_ab))
@@ -140,7 +141,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
     vv = _dot(v, v)
     W_prev, WA_prev, WB_prev = fs[_WP:_WP + 4], fs[_WAP:_WAP + 4], fs[_WBP:_WBP + 4]
     lam_prev = fv[_LAMP:_LAMP + 4]
-    v_prev = ws[0][_T3 + 12]
+    v_prev = ws[0][_T_VPREV]
     it = 0
     flag = _GJK_CAP
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
@@ -183,7 +184,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
                 if k_f != 0:
                     face_left -= 1
                     it += 1
-                    if k_f > 0 and _dot(fs[_T3 + 15], fs[_T3 + 16]) < 0.0:
+                    if k_f > 0 and _dot(fs[_T_MIN_D], fs[_T_MIN_W]) < 0.0:
                         return n, it, _GJK_POLISHED, 0.0
             # near the end: the last 4 supports (this one included, which the fit
             # skips) are the samples
@@ -213,7 +214,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
                                                min(nsamp, 4), d[0] * inv, d[1] * inv,
                                                d[2] * inv, w[0], w[1], w[2], wa[0], wa[1],
                                                wa[2])
-                if k_pol > 0 and _dot(fs[_T3 + 15], fs[_T3 + 16]) < 0.0:
+                if k_pol > 0 and _dot(fs[_T_MIN_D], fs[_T_MIN_W]) < 0.0:
                     return n, it + k_pol, _GJK_POLISHED, 0.0
                 it += abs(k_pol)
         dup = False
@@ -309,7 +310,7 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     ws, res = borrow_gjk_workspace(ws), borrow(res)
     dep = res[0]
     sh = dep + EPA_WITNESS_SHIFT * scale
-    t2 = ws[0][_T3 + 13]
+    t2 = ws[0][_T_SHIFT]
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
     n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False, False)

@@ -34,8 +34,9 @@ which pairs come here and which pair kernel (kernels/pairs/) runs first):
      drops failed pairs).  Then (_caps_fallback, below) a pair with a closed form takes it
      (analytic.collide_analytic, exact), and any other takes MPR's normal where its
      support value is the smaller upper bound of the depth, and MPR's contact in place
-     of FAILED (bench/fuzz.py found both: a tiny capsule inside a large one FAILED, a
-     small body deep in a large cylinder or cone up to 2e-5 * scale too deep).
+     of FAILED (the cases that need them: a tiny capsule inside a large one, where EPA
+     fails, and a small body deep in a large cylinder or cone, where EPA's depth can be
+     up to 2e-5 * scale too deep).
   Witness points: barycentric coordinates of the closest point on the final simplex /
   EPA face, applied to the support points of A and B, then moved out by the radii.
   When the origin's projection falls outside the final EPA face (sliver faces of flat
@@ -90,15 +91,17 @@ import numpy as np
 from .analytic import collide_analytic
 from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_FAIL_GAP, M_GJK_EPA,
                         OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE,
-                        PLANE, ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
-                        TOUCH_TOL)
+                        PLANE, PRE_APART, PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, ST_FAILED,
+                        ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
 from .epa import _epa, _grow_to_tetra
 from .geometry import (borrow_args, inflation, meet, minkowski_core_xyz, minkowski_full_xyz,
                        shape_scale)
 from .gjk import (_GJK_BOUND, _GJK_CAP, _GJK_OVERLAP, _GJK_POLISHED, _GJK_STALL, _gjk,
                   _witness_by_gjk)
-from .gjk_epa_workspace import (_BC_ROWS, _FD, _FS_ROWS, _LAM, _RES, _T3, _V, _VV, _W, _WA, _WB,
-                                _dot, borrow_gjk_workspace, make_gjk_workspace)
+from .gjk_epa_workspace import (_BC_ROWS, _FD, _FS_ROWS, _LAM, _RES, _T_EST_D, _T_EST_W, _T_EST_WA,
+                                _T_EST_WB, _T_MIN_D, _T_MIN_W, _T_MIN_WA, _T_MIN_WB, _T_NRM, _T_PA,
+                                _T_PB, _V, _VV, _W, _WA, _WB, _dot, borrow_gjk_workspace,
+                                make_gjk_workspace)
 from .jit import borrow, njit_inline, njit_kernel
 from .mpr import MPR_WS_ROWS, mpr_ws
 from .pairs.box_cylinder import collide_box_cylinder
@@ -110,7 +113,7 @@ from .pairs.cylinder_cylinder import collide_cylinder_cylinder
 from .pairs.ellipsoid_box import collide_ellipsoid_box
 from .pairs.ellipsoid_convex import collide_ellipsoid_convex, ellipsoid_hull_pair
 from .pairs.ellipsoid_cylinder import collide_ellipsoid_cylinder
-from .pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNDECIDED, HE_UNPROVED
+from .pairs.normal_fan import HE_ROWS
 from .polish_pairs import _ellipsoid_box, _gjk_newton_pair, _has_crease
 from .tracebuf import TR_HEADER_ROWS, trace_reset
 
@@ -203,7 +206,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     out = borrow(out)
-    nrm, pa, pb = ws[0][_T3 + 0], ws[0][_T3 + 1], ws[0][_T3 + 2]
+    nrm, pa, pb = ws[0][_T_NRM], ws[0][_T_PA], ws[0][_T_PB]
     # a trace region (module docstring, "Trace"): its options, then reset
     trace_on = ws[0].shape[0] >= _FS_ROWS + TR_HEADER_ROWS
     iterate = False
@@ -230,65 +233,58 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     ra = inflation(sa[0], sa[1])
     rb = inflation(sb[0], sb[1])
     res = ws[1][_RES:_RES + 10]
-    fan = HE_UNDECIDED
+    # what a pair kernel run before GJK decides (constants.PRE_*): a certified depth or an
+    # exact distance, or a plane proving the cores farther apart than ``stop`` (the
+    # cutoff and the touching band beyond the inflation radii: GJK would stop there too)
+    stop = ra + rb + band
+    pre = PRE_UNDECIDED
     if not iterate and (sa[0] == CYLINDER or sb[0] == CYLINDER):
         # a cylinder with a cylinder, a capsule, an ellipsoid or a hull (pairs/), or a
         # box (box_cylinder: the exact depth in closed form): cores that overlap get their
         # depth certified (cylinder_common: one core's point as deep inside the cylinder as h
-        # along the normal there, by a ball); cores that a plane (a cap's, the side's
-        # tangent plane, the sides' crossing; for a box, the line of centres or one of
-        # box_cylinder's candidate directions) proves apart by more than the cutoff and the
-        # touching band end with that gap as the distance bound, as GJK would stop
-        # there too.  Either without GJK or EPA; else GJK and EPA
+        # along the normal there, by a ball), or a plane (a cap's, the side's tangent
+        # plane, the sides' crossing; for a box, the line of centres or one of
+        # box_cylinder's candidate directions) proves them apart
         other = sb[0] if sa[0] == CYLINDER else sa[0]
-        d = 0.0
         if other == CYLINDER:
-            d = collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, res)
+            pre = collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, stop, res)
         elif other == BOX:
-            d = collide_box_cylinder(sa, sb, r_ab, t_ab, scale, fs[_V:_V + _BC_ROWS], res)
+            pre = collide_box_cylinder(sa, sb, r_ab, t_ab, scale, fs[_V:_V + _BC_ROWS], stop,
+                                       res)
         elif other == CAPSULE:
-            d = collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, res)
+            pre = collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, stop, res)
         elif other == ELLIPSOID:
-            d = collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, res)
+            pre = collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, stop, res)
         elif other == CONVEX:
             if cylinder_hull_pair(sa, sb):
                 # the hull's fan stored (cylinder_convex): as the ellipsoid's below
-                fan = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False,
-                                              ra + rb + band, fs[_V:_V + HE_ROWS],
-                                              fv[_FD:_FD + 8], res)
-                if fan == HE_EXACT or fan == HE_APART:
-                    return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
-            if fan == HE_UNDECIDED:
-                d = collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res)
-        if d > 0.0 or (d < 0.0 and -d - ra - rb > band):
-            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+                pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
+                                              fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+            if pre == PRE_UNDECIDED:
+                pre = collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, stop, res)
     elif not iterate and _ellipsoid_box(sa[0], sb[0]):
         # an ellipsoid and a box (ellipsoid_box): the core depth at a box face certified by a
-        # ball, the cores' exact distance over a face, an edge or a vertex, or a plane
-        # proving them farther apart than the cutoff and the touching band
-        d, exact = collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, ra + rb + band, res)
-        if exact or (d < 0.0 and -d - ra - rb > band):
-            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+        # ball, the cores' exact distance over a face, an edge or a vertex, or a face plane
+        # proving them apart
+        pre = collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res)
     elif not iterate and ellipsoid_hull_pair(sa, sb):
         # an ellipsoid and a small hull with its normal fan stored (ellipsoid_convex): the exact
-        # depth when a cheap test proves the pair overlapping; without that proof, again
-        # after GJK once it finds the cores overlapping (below, in place of EPA); or a
-        # hull face's plane proving the cores farther apart than the cutoff and the
-        # touching band
-        fan = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, False, ra + rb + band,
+        # depth when a cheap test proves the pair overlapping; without that proof
+        # (PRE_UNPROVED), again after GJK once it finds the cores overlapping (below, in
+        # place of EPA); or a hull face's plane proving the cores apart
+        pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
                                        fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
-        if fan == HE_EXACT or fan == HE_APART:
-            return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
+    if pre == PRE_EXACT or pre == PRE_APART:
+        return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
     # phase 1: cores
-    n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws,
-                              ra + rb + band,
+    n, it, flag, bound = _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop,
                               _gjk_newton_pair(sa[0], sb[0])
                               or _has_crease(sa[0]) or _has_crease(sb[0]), trace_on)
     iters = it
     if flag == _GJK_POLISHED:
         # cores apart, closest points from Newton's method: pb - pa == dist * n exactly
-        pd, pw = fs[_T3 + 15], fs[_T3 + 16]
-        pwa, pwb = fs[_T3 + 17], fs[_T3 + 18]
+        pd, pw = fs[_T_MIN_D], fs[_T_MIN_W]
+        pwa, pwb = fs[_T_MIN_WA], fs[_T_MIN_WB]
         dist = -_dot(pd, pw)
         for c in range(3):
             nrm[c] = pd[c]
@@ -329,7 +325,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         st = _set_out(out, vn - ra - rb, nrm[0], nrm[1], nrm[2], pa, pb, iters, scale)
         if flag == _GJK_CAP and st != ST_FAILED:
             # accept the estimate only when the last duality gap was small
-            d, wa, wb, w = ws[0][_T3 + 4], ws[0][_T3 + 5], ws[0][_T3 + 6], ws[0][_T3 + 7]
+            d, wa, wb, w = ws[0][_T_EST_D], ws[0][_T_EST_WA], ws[0][_T_EST_WB], ws[0][_T_EST_W]
             for c in range(3):
                 d[c] = -v[c]
             ax_, ay_, az_, bx_, by_, bz_ = minkowski_core_xyz(
@@ -342,17 +338,15 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         if flag == _GJK_STALL:
             st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, True)
         return st
-    if fan == HE_UNPROVED:
+    if pre == PRE_UNPROVED:
         # GJK found the cores overlapping: the fan's exact depth in place of EPA
         if sa[0] == CYLINDER or sb[0] == CYLINDER:
-            fan = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, True,
-                                          ra + rb + band, fs[_V:_V + HE_ROWS],
-                                          fv[_FD:_FD + 8], res)
+            pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, True, stop,
+                                          fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
         else:
-            fan = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, True,
-                                           ra + rb + band, fs[_V:_V + HE_ROWS],
-                                           fv[_FD:_FD + 8], res)
-        if fan == HE_EXACT:
+            pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, True, stop,
+                                           fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+        if pre == PRE_EXACT:
             return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
     # by a ball of radius ra + rb, so depth = core depth + ra + rb exactly.
@@ -451,7 +445,7 @@ def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
             out[OUT_ITERS] = iters
             return classify(out[OUT_DIST], scale)
         return st
-    pa, pb = ws[0][_T3 + 1], ws[0][_T3 + 2]
+    pa, pb = ws[0][_T_PA], ws[0][_T_PB]
     pa[0], pb[0] = meet(ax, bx, -h * nx)
     pa[1], pb[1] = meet(ay, by, -h * ny)
     pa[2], pb[2] = meet(az, bz, -h * nz)

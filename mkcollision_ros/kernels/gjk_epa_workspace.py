@@ -36,16 +36,30 @@ from .tracebuf import TR_HEADER_ROWS
 #      deep GJK/EPA pairs with a cylinder 7-10% faster as uint64, the same results).
 #      Mind numba's typing: int64 and uint64 unify to float64, so a variable that takes
 #      both (a slot index from ``free`` or from ``nf``) is cast with np.uint64.
-# t3 rows (fs[_T3 + k]): 0-2 nrm, pa, pb of gjk_epa; 3 (column 0) the cap a face test
-# proved (_face_basin); 4-7 d, wa, wb, w of gjk_epa; 8-11
-# d, wa, wb, w of _gjk / _grow_to_tetra / _epa; 12 v_prev (_gjk) or cin (_epa); 13-14
-# ud, uwa (_epa; 13 also the shifted t_ab of _witness_by_gjk); 15-18 bw, bwa, bwb, bdir
-# (_grow_to_tetra), then d, w, wa, wb of _newton_min_support's result; 19-24 d, wa, wb,
-# w, e1, e2 (_polish_min_support).
+# The t3 rows: 3-vectors of fs, from _T3 on, each named for its use.  Rows whose users
+# never run at the same time share a row under two names.
 _NVMAX = EPA_MAX_ITERS + 4
 _PK = EPA_POLISH_ITERS + 4    # samples of the local polish: <= 4 given + one per step
 _W, _WA, _WB, _WP, _WAP, _WBP = 0, 4, 8, 12, 16, 20
 _T3 = 24
+_T_NRM, _T_PA, _T_PB = _T3, _T3 + 1, _T3 + 2   # gjk_epa's answer: normal, witnesses on A, B
+_T_FACE_CAP = _T3 + 3       # column 0: the cap a face test proved (polish_faces._face_basin)
+# gjk_epa's check of GJK's estimate when GJK's cap is hit: direction, support points
+_T_EST_D, _T_EST_WA, _T_EST_WB, _T_EST_W = _T3 + 4, _T3 + 5, _T3 + 6, _T3 + 7
+# the current search direction and its support points on A, B and A - B (_gjk,
+# _grow_to_tetra, _epa, polish_crease, polish_newton)
+_T_D, _T_WA, _T_WB, _T_W = _T3 + 8, _T3 + 9, _T3 + 10, _T3 + 11
+_T_VPREV = _T3 + 12          # _gjk: the previous closest point
+_T_CIN = _T3 + 12            # _epa: a point inside the polytope
+_T_UD, _T_UWA = _T3 + 13, _T3 + 14   # _epa: the best upper bound's direction, A's point
+_T_SHIFT = _T3 + 13          # gjk._witness_by_gjk: the shifted t_ab
+# a polish's minimum (_store_min): direction n, difference point w, witnesses on A and B
+_T_MIN_D, _T_MIN_W, _T_MIN_WA, _T_MIN_WB = _T3 + 15, _T3 + 16, _T3 + 17, _T3 + 18
+# _grow_to_tetra's best candidate: difference point, A's and B's points, direction
+_T_BEST_W, _T_BEST_WA, _T_BEST_WB, _T_BEST_DIR = _T3 + 15, _T3 + 16, _T3 + 17, _T3 + 18
+# epa._polish_min_support's pattern search: direction, support points, two tangents
+_T_PAT_D, _T_PAT_WA, _T_PAT_WB, _T_PAT_W = _T3 + 19, _T3 + 20, _T3 + 21, _T3 + 22
+_T_PAT_E1, _T_PAT_E2 = _T3 + 23, _T3 + 24
 _CAND = _T3 + 25
 _V = _CAND + 6
 _VA = _V + _NVMAX
@@ -110,7 +124,7 @@ def _store_min(fs, nx, ny, nz, wx, wy, wz, ax, ay, az, bx, by, bz):
     """A minimum found by a polish (Newton's method, the crease searches, the face
     tests) into ws t3 rows 15-18: direction n, the difference point w, the witnesses
     a on A and b on B."""
-    pd, pw, pwa, pwb = fs[_T3 + 15], fs[_T3 + 16], fs[_T3 + 17], fs[_T3 + 18]
+    pd, pw, pwa, pwb = fs[_T_MIN_D], fs[_T_MIN_W], fs[_T_MIN_WA], fs[_T_MIN_WB]
     pd[0], pd[1], pd[2] = nx, ny, nz
     pw[0], pw[1], pw[2] = wx, wy, wz
     pwa[0], pwa[1], pwa[2] = ax, ay, az
@@ -122,7 +136,7 @@ def _take_polished(fs, d, w, wa, wb):
     """Copy the polished minimum (ws t3 rows 15-18: direction, difference point,
     support points of A and B) into EPA's d, w, wa, wb."""
     for c in range(3):
-        d[c] = fs[_T3 + 15, c]
-        w[c] = fs[_T3 + 16, c]
-        wa[c] = fs[_T3 + 17, c]
-        wb[c] = fs[_T3 + 18, c]
+        d[c] = fs[_T_MIN_D, c]
+        w[c] = fs[_T_MIN_W, c]
+        wa[c] = fs[_T_MIN_WA, c]
+        wb[c] = fs[_T_MIN_WB, c]

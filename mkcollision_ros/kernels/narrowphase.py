@@ -27,10 +27,11 @@ ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
   G      gjk_epa.gjk_epa_ws: GJK on the cores (gjk._gjk); EPA on the cores (epa._epa)
          when they overlap; _caps_fallback when GJK stalls or EPA hits its caps (the
          pair's closed form by analytic.collide_analytic, else mpr.mpr_ws).
-  G-pre  a pair kernel that gjk_epa_ws runs before GJK.  It answers with a certified core
-         depth ("depth"), or with a plane proving the cores farther apart than
+  G-pre  a pair kernel that gjk_epa_ws runs before GJK.  It returns one outcome code
+         (constants.PRE_*): PRE_EXACT, a certified core depth ("depth") or an exact
+         distance; PRE_APART, a plane proving the cores farther apart than
          max(cutoff, touching band), that gap a certified lower bound ("apart");
-         anything else continues with G.
+         PRE_UNDECIDED (and the fan kernels' PRE_UNPROVED) continues with G.
   A margin grows the core (kernels/geometry.py) and changes no route but
   sphere-ellipsoid's here (and the ellipsoid methods', below).
 
@@ -55,13 +56,13 @@ ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
                          collide_ellipsoid_cylinder
   ellipsoid-cone       G                                           -
   ellipsoid-convex     G-pre ellipsoid_convex.                     a hull with its fan
-                         collide_ellipsoid_convex                  stored: HE_EXACT,
-                                                                   HE_APART; HE_UNPROVED:
+                         collide_ellipsoid_convex                  stored: PRE_EXACT,
+                                                                   PRE_APART; PRE_UNPROVED:
                                                                    G, and once GJK finds
                                                                    the cores overlapping,
                                                                    this kernel again in
                                                                    place of EPA; no fan or
-                                                                   HE_UNDECIDED: G
+                                                                   PRE_UNDECIDED: G
   ellipsoid-plane      _half_space_world                           CF
   box-box              _box_box: box_box.collide_box_box           cores overlapping: exact
                                                                    depth; apart by more
@@ -86,7 +87,7 @@ ellipsoid 1, box 2, capsule 3, cylinder 4, cone 5, convex 6, plane 7.
                          collide_cylinder_cylinder
   cylinder-cone        G                                           -
   cylinder-convex      G-pre cylinder_convex.                      as ellipsoid-convex, but
-                         collide_cylinder_convex                   no fan or HE_UNDECIDED:
+                         collide_cylinder_convex                   no fan or PRE_UNDECIDED:
                                                                    G-pre cylinder_convex.
                                                                    collide_cylinder_convex_
                                                                    ball (depth or apart),

@@ -17,7 +17,7 @@ from .certificates import _ball_certified
 from .constants import (BOX, CYLINDER, EPA_KINK_ITERS, EPA_KINK_STEP, EPA_POLISH_CAP, EPA_REL_TOL,
                         POLISH_STEP_DONE)
 from .geometry import borrow_args, minkowski_core_xyz
-from .gjk_epa_workspace import _T3, _store_min, borrow_gjk_workspace
+from .gjk_epa_workspace import _T_D, _store_min, borrow_gjk_workspace
 from .jit import njit_inline, njit_kernel
 from .polish_pairs import _axis_of
 
@@ -194,7 +194,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, axis):
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     ws = borrow_gjk_workspace(ws)
     fs = ws[0]
-    d = fs[_T3 + 8]
+    d = fs[_T_D]
     tol = EPA_REL_TOL * scale
     kx, ky, kz = _axis_of(side, axis, r_ab)
     r = _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, d[0], d[1], d[2])

@@ -19,7 +19,8 @@ import numpy as np
 from .certificates import _face_basin
 from .constants import BOX, CYLINDER, EPA_KINK_NEAR, EPA_MAX_FACES
 from .geometry import borrow_args
-from .gjk_epa_workspace import _IF, _NVMAX, _T3, _VA, _VB, _store_min, borrow_gjk_workspace
+from .gjk_epa_workspace import (_IF, _NVMAX, _T_FACE_CAP, _VA, _VB, _store_min,
+                                borrow_gjk_workspace)
 from .jit import njit_inline, njit_kernel
 from .pairs.cylinder_cylinder import sides_crossing
 from .pairs.ellipsoid_box import face_room
@@ -259,7 +260,7 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
         _store_min(fs, nx, ny, nz, h * nx, h * ny, h * nz, max_ + s_ * kax,
                    may_ + s_ * kay, maz_ + s_ * kaz, mbx + t_ * kbx, mby + t_ * kby,
                    mbz + t_ * kbz)
-        fs[_T3 + 3, 0] = _face_basin(rin, h)
+        fs[_T_FACE_CAP, 0] = _face_basin(rin, h)
         return 1
     return 0
 
@@ -294,7 +295,7 @@ def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
         return False
     _store_min(fs, nx, ny, 0.0, h * nx, h * ny, 0.0, ra * nx, ra * ny, s,
                t_ab[0] - rb * nx + u * bx, t_ab[1] - rb * ny + u * by, t_ab[2] + u * bz)
-    fs[_T3 + 3, 0] = _face_basin(rin, h)
+    fs[_T_FACE_CAP, 0] = _face_basin(rin, h)
     return True
 
 
@@ -417,7 +418,7 @@ def _face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, k, s):
     if not rin >= 1e-7 * scale:
         return -1
     _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
-    fs[_T3 + 3, 0] = _face_basin(rin, h)
+    fs[_T_FACE_CAP, 0] = _face_basin(rin, h)
     return 1
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from .constants import EPA_MAX_FACES, EPA_POLISH_ITERS, EPA_POLISH_STEP, POLISH_STEP_DONE
 from .geometry import borrow_args, minkowski_core_xyz
-from .gjk_epa_workspace import (_IF, _NVMAX, _PK, _PN, _PW, _T3, _V, _VD, _store_min,
+from .gjk_epa_workspace import (_IF, _NVMAX, _PK, _PN, _PW, _T_D, _T_W, _T_WA, _V, _VD, _store_min,
                                 borrow_gjk_workspace)
 from .jit import njit_inline, njit_kernel
 
@@ -148,7 +148,7 @@ def _epa_polish(sa, sb, verts, r_ab, t_ab, scale, ws, f):
     V, VD = fs[_V:_V + _NVMAX], fs[_VD:_VD + _NVMAX]
     PN, PW = fs[_PN:_PN + _PK], fs[_PW:_PW + _PK]
     F = ws[2][_IF:_IF + EPA_MAX_FACES]
-    d, wa, w = fs[_T3 + 8], fs[_T3 + 9], fs[_T3 + 11]
+    d, wa, w = fs[_T_D], fs[_T_WA], fs[_T_W]
     ns = np.int64(0)          # typed int64 at once (jit.py, "Literal")
     for q in range(3):
         i = F[f, q]

@@ -1,7 +1,7 @@
 """Exact penetration depth of a box and a cylinder whose cores overlap, in closed form
 with a certificate, instead of GJK and EPA (gjk_epa.gjk_epa_ws calls it first for such a
 pair; where it cannot certify that the cores overlap and what the depth is, it returns
-0 and GJK and EPA run as for any pair).
+PRE_UNDECIDED and GJK and EPA run as for any pair).
 
 The problem.  In the cylinder's frame (axis z, radius r, half height hc) let the box
 have centre c, unit axes a_i and half extents e_i.  For a unit direction m (from the
@@ -89,6 +89,7 @@ import math
 from ..constants import BC_FEAT, BC_MAX_LEVEL, BOX, EPA_REL_TOL
 from ..geometry import borrow_pose, meet
 from ..jit import borrow, njit_inline, njit_kernel
+from .cylinder_common import pre_outcome
 
 
 @njit_inline
@@ -425,7 +426,7 @@ def _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, gap, mx, my, mz):
 
 
 @njit_kernel
-def collide_box_cylinder(sa, sb, r_ab, t_ab, scale, scratch, res):
+def _box_cylinder_bound(sa, sb, r_ab, t_ab, scale, scratch, res):
     """The depth of a box and a cylinder (shape tuples sa, sb, one of each, B's pose
     r_ab, t_ab in A's frame) whose cores overlap, as the module doc says.  ``scratch``
     float64 (>= BC_MAX_LEVEL + 8, 3).  On success writes res[:10] = [depth, n (3),
@@ -545,3 +546,12 @@ def collide_box_cylinder(sa, sb, r_ab, t_ab, scale, scratch, res):
         res[5], res[8] = meet(cpy, bpy, d * my)
         res[6], res[9] = meet(cpz, bpz, d * mz)
     return d
+
+
+@njit_inline
+def collide_box_cylinder(sa, sb, r_ab, t_ab, scale, scratch, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for a box and a cylinder (constants.PRE_*;
+    ``scratch`` as _box_cylinder_bound's): PRE_EXACT with res[:10] the cores' certified
+    depth, normal and points (_box_cylinder_bound), PRE_APART when a plane proves the cores
+    farther apart than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    return pre_outcome(_box_cylinder_bound(sa, sb, r_ab, t_ab, scale, scratch, res), stop)

@@ -1,24 +1,24 @@
 """Penetration depth of a capsule and a cylinder whose cores overlap, certified by the
 ball of cylinder_common.py, before GJK and EPA (gjk_epa.gjk_epa_ws calls
 ``collide_capsule_cylinder`` first for such a pair; where nothing is certified it
-returns 0 and GJK and EPA run as for any pair).  The candidates and the measurements:
-collide_capsule_cylinder's docstring.
+returns PRE_UNDECIDED and GJK and EPA run as for any pair).  The candidates and the
+measurements: _capsule_cylinder_bound's docstring.
 """
 import math
 
 from ..constants import CYLINDER, EPA_REL_TOL
 from ..geometry import borrow_pose, cylinder_inradius
-from ..jit import borrow, njit_kernel
+from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import (_cap_normal, _certified_out, _frame, _past_cap, _past_side,
-                              _side_normal)
+                              _side_normal, pre_outcome)
 
 
 @njit_kernel
-def collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, res):
+def _capsule_cylinder_bound(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a capsule and a cylinder (either order), certified by the
-    ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus the
+    ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus the
     gap (< 0) when a
-    plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when neither.
+    plane proves the cores apart (as _cylinder_cylinder_bound); 0 (res untouched) when neither.
     A capsule's core is the segment c +- eta k
     (its axis); the depth of the capsules is the core depth grown by the radii.
 
@@ -97,3 +97,12 @@ def collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, res):
     d = big_r - q
     _certified_out(res, d, nx, ny, nz, side, r_ab, t_ab, px, py, pz)
     return d
+
+
+@njit_inline
+def collide_capsule_cylinder(sa, sb, r_ab, t_ab, scale, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for a capsule and a cylinder
+    (constants.PRE_*): PRE_EXACT with res[:10] the cores' certified depth, normal and
+    points (_capsule_cylinder_bound), PRE_APART when a plane proves the cores farther apart
+    than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    return pre_outcome(_capsule_cylinder_bound(sa, sb, r_ab, t_ab, scale, res), stop)

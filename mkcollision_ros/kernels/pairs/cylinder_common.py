@@ -5,12 +5,15 @@ depth; ``_apart_out``: a plane proving the cores apart, whose gap gjk_epa.gjk_ep
 takes as GJK's distance bound in contacts mode), a cylinder's frame and its side and
 cap normals (``_frame``, ``_side_normal``, ``_cap_normal``), the tests against a cap
 and past a side (``_cap_test``, ``_past_cap``, ``_past_side``), the cover bound
-(``_cover``) and Newton's step on an angle (``_newton_turn``, ``gap_newton_step``).
+(``_cover``), Newton's step on an angle (``_newton_turn``, ``gap_newton_step``) and the
+outcome code of a bound (``pre_outcome``).
 
-Each pair kernel returns the core depth (> 0) with res (10,) = [depth, n (3), pa (3),
-pb (3)] on the cores in A's frame (n from A to B), minus the gap (< 0) with res = [-gap,
-n, pa, pb] when a plane proves the cores apart, or 0 (res untouched) when neither, and
-GJK and EPA then run as for any pair.
+Each pair's bound kernel (``_<a>_<b>_bound``) returns the core depth (> 0) with res (10,)
+= [depth, n (3), pa (3), pb (3)] on the cores in A's frame (n from A to B), minus the gap
+(< 0) with res = [-gap, n, pa, pb] when a plane proves the cores apart, or 0 (res
+untouched) when neither; its entry point ``collide_<a>_<b>`` turns that into the outcome
+code of every pair kernel run before GJK (constants.PRE_*, ``pre_outcome``), and on
+PRE_UNDECIDED GJK and EPA run as for any pair.
 
 The certificate (as certificates._ball_certified).  If a point p of A's core has the ball
 of radius delta about it inside B's core, the core difference A - B holds the ball of
@@ -24,9 +27,23 @@ ball about p has the radius min(R - |p_xy|, H - |p_z|).
 """
 import math
 
-from ..constants import CC_COVER_STEPS, CC_HALF_TAN_DONE, CC_HALF_TAN_MAX
+from ..constants import (CC_COVER_STEPS, CC_HALF_TAN_DONE, CC_HALF_TAN_MAX, PRE_APART, PRE_EXACT,
+                         PRE_UNDECIDED)
 from ..geometry import cylinder_inradius
 from ..jit import njit_inline
+
+
+@njit_inline
+def pre_outcome(d, stop):
+    """The outcome code (constants.PRE_*) of a cylinder pair's bound d (its res[0]): a
+    certified core depth d > 0 is PRE_EXACT, a proved gap -d beyond ``stop`` (m)
+    PRE_APART, anything else (0: nothing proved; a gap within ``stop``, which GJK
+    refines) PRE_UNDECIDED."""
+    if d > 0.0:
+        return PRE_EXACT
+    if d < 0.0 and -d > stop:
+        return PRE_APART
+    return PRE_UNDECIDED
 
 
 @njit_inline

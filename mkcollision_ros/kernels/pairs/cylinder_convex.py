@@ -62,7 +62,7 @@ and in the face pass any face's plane, with B wholly beyond it by more than the
 caller's ``stop``, end the call with that gap as a bound (as GJK's first separating
 plane).  Near-degenerate edges (nearly square to the axis or along it: the projected
 rim a near-segment or a near-circle) and non-converging searches decide nothing
-(HE_UNDECIDED): GJK and EPA take the pair.
+(PRE_UNDECIDED): GJK and EPA take the pair.
 
 The answer is for C and B's core (no rolling radius: a cylinder's core is itself):
 res = [U, n, pa, pb] as ellipsoid_convex's, the witnesses exact for the feature pair found (a
@@ -83,14 +83,15 @@ import math
 import numpy as np
 
 from ..constants import (CYLINDER, EPA_REL_TOL, FAN_MAX_POINTS, GJK_FLAT_TOL, HC_GJK_ITERS,
-                         HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL)
+                         HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL, PRE_APART, PRE_EXACT,
+                         PRE_UNDECIDED, PRE_UNPROVED)
 from ..geometry import borrow_args, cylinder_inradius
 from ..jit import borrow, njit_inline, njit_kernel
-from .cylinder_common import (_cap_normal, _cap_test, _certified_out, _cover, _frame, _past_side,
-                              _side_normal)
-from .normal_fan import (HE_APART, HE_EXACT, HE_FACES, HE_MAX_FACES, HE_UNDECIDED, HE_UNPROVED,
-                         HE_V, _in_arc, _plane_feet, _planes_on_arc, _vertex_top, face_apart_out,
-                         fan_run, fan_stored, hull_pose, least_offset, plane_foot)
+from .cylinder_common import (_cap_normal, _cap_test, _certified_out, _cover, _frame,
+                              _past_side, _side_normal, pre_outcome)
+from .normal_fan import (HE_FACES, HE_MAX_FACES, HE_V, _in_arc, _plane_feet, _planes_on_arc,
+                         _vertex_top, face_apart_out, fan_run, fan_stored, hull_pose, least_offset,
+                         plane_foot)
 
 
 @njit_inline
@@ -289,7 +290,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
     v0, vn = hull[2], hull[3]
     nf, ne, nvx, fnr, fe, fl = fan_run(hull[1], v0, vn, verts)
     if vn > FAN_MAX_POINTS or nf > HE_MAX_FACES:
-        return HE_UNDECIDED
+        return PRE_UNDECIDED
     # the hull's pose in C's frame
     r00, r01, r02, r10, r11, r12, r20, r21, r22, t0, t1, t2 = hull_pose(side, r_ab, t_ab)
     big_r, big_h = cyl[0], cyl[1]
@@ -313,7 +314,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
         if -(hC + omin) > stop:
             _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
                        big_r, big_h, -(hC + omin))
-            return HE_APART
+            return PRE_APART
     inside = omin > 0.0
     # the vertices in C's frame, the lowest and the highest, and L, the depth in C of
     # the deepest one inside (A - B holds C - v, so the depth is at least that); row
@@ -349,7 +350,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
         u = imin
         _out(res, side, r_ab, t_ab, big_r - smin, hx, hy, 0.0, big_r * hx, big_r * hy,
              min(max(V[u, 2], -big_h), big_h), V[u, 0], V[u, 1], V[u, 2])
-        return HE_APART
+        return PRE_APART
     # B wholly above the top cap's plane or below the bottom's
     for si in range(2):
         gap = zlo - big_h if si == 0 else -zhi - big_h
@@ -359,7 +360,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
             ax, ay, az = _cap_point(big_r, big_h, s, V[u, 0], V[u, 1])
             _out(res, side, r_ab, t_ab, -gap, 0.0, 0.0, s, ax, ay, az, V[u, 0], V[u, 1],
                  V[u, 2])
-            return HE_APART
+            return PRE_APART
     # the pruning below holds only for a pair that overlaps: proved by the caller (GJK),
     # a hull vertex inside C, C's centre inside B, or else C's point nearest B's origin
     # inside B (half of the deep pairs the first two leave, in the benchmark's row;
@@ -383,12 +384,12 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
             g, gap, mx, my, mz, u = _cyl_gjk(V, fl, nf, nvx, big_r, big_h, t0, t1, t2,
                                              stop)
             if g == 0:
-                return HE_UNPROVED
+                return PRE_UNPROVED
             if g == 2:
                 ax, ay, az = _cyl_point(big_r, big_h, mx, my, mz)
                 _out(res, side, r_ab, t_ab, -gap, mx, my, mz, ax, ay, az, V[u, 0],
                      V[u, 1], V[u, 2])
-                return HE_APART
+                return PRE_APART
     # the best candidate: its value U, normal n and C's witness a (B's is a - U n)
     U = np.inf
     nx = ny = nz = ax = ay = az = 0.0
@@ -404,8 +405,8 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
             if -val > stop:
                 _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my,
                            mz, big_r, big_h, -val)
-                return HE_APART
-            return HE_UNDECIDED
+                return PRE_APART
+            return PRE_UNDECIDED
         M[f, 0], M[f, 1], M[f, 2] = mx, my, mz
         Q[f, 0], Q[f, 2] = val, big_r / sm if sm > 0.0 else 0.0
         if val < U:
@@ -482,7 +483,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
         # the side: the equator meets the circle at +-w, w = z x e / |z x e|
         wl = math.sqrt(ex * ex + ey * ey)
         if not wl > 1e-9:
-            return HE_UNDECIDED
+            return PRE_UNDECIDED
         wx, wy = -ey / wl, ex / wl
         ap, aq = wx * px + wy * py, wx * qx + wy * qy
         if not _in_arc(ap, aq, cq, sq):
@@ -526,7 +527,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
             k, ux, uy, P0, P1, lam0, lam1 = _plane_feet(g11, g12, g22, wp, wq, U, scale,
                                                         roots)
             if k < 0:
-                return HE_UNDECIDED
+                return PRE_UNDECIDED
             for r in range(k):
                 val, bp, bq = plane_foot(roots[r], P0, P1, lam0, lam1, ux, uy)
                 if not val < U:
@@ -539,10 +540,10 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
                 nx, ny, nz = mx, my, mz
                 ax, ay, az = big_r * mx / rho, big_r * my / rho, s * big_h
     if not math.isfinite(U):
-        return HE_UNDECIDED
+        return PRE_UNDECIDED
     _out(res, side, r_ab, t_ab, U, nx, ny, nz, ax, ay, az, ax - U * nx, ay - U * ny,
          az - U * nz)
-    return HE_EXACT
+    return PRE_EXACT
 
 
 @njit_inline
@@ -558,11 +559,11 @@ def _shadow_closest(ax, ay, bx, by):
 
 
 @njit_kernel
-def collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res):
+def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a convex hull and a cylinder (either order), certified by
-    the ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus
+    the ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus
     the gap (< 0) when
-    a plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when
+    a plane proves the cores apart (as _cylinder_cylinder_bound); 0 (res untouched) when
     neither.  The hull's points are its vertices (verts, body frame) and their convex
     combinations; the candidates are hull points in the cylinder's frame:
       - for each cap, the hull's lowest vertex p under the cap's plane: h along the
@@ -717,6 +718,15 @@ def collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, res):
         else:
             qx, qy, qz = ax, ay, az
     return 0.0
+
+
+@njit_inline
+def collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for any convex hull and a cylinder, by the
+    ball (constants.PRE_*): PRE_EXACT with res[:10] the cores' certified depth, normal and
+    points (_cylinder_convex_ball_bound), PRE_APART when a plane proves the cores farther
+    apart than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    return pre_outcome(_cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res), stop)
 
 
 @njit_inline

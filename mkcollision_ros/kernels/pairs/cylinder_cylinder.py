@@ -1,7 +1,7 @@
 """Penetration depth of two cylinders whose cores overlap, from a point of one core
 deep inside the other cylinder, certified by a ball and found without GJK or EPA
 (gjk_epa.gjk_epa_ws calls ``collide_cylinder_cylinder`` first for such a pair; where no
-candidate is certified it returns 0 and GJK and EPA run as for any pair).  The
+candidate is certified it returns PRE_UNDECIDED and GJK and EPA run as for any pair).  The
 certificate, the answers and the shared helpers: cylinder_common.py.
 
 The candidates, each a pair (p, n) whose ball radius and h(n) meet when the deepest
@@ -60,8 +60,8 @@ import math
 from ..constants import CC_CROSS_RINGS, CC_NEWTON_ITERS, CC_RIMS, EPA_REL_TOL
 from ..geometry import borrow_args, cylinder_inradius, minkowski_core_xyz
 from ..jit import borrow, njit_inline, njit_kernel
-from .cylinder_common import (_apart_out, _cap_normal, _certified_out, _cover, _frame, _newton_turn,
-                              _past_cap, _past_side, _side_normal)
+from .cylinder_common import (_apart_out, _cap_normal, _certified_out, _cover, _frame,
+                              _newton_turn, _past_cap, _past_side, _side_normal, pre_outcome)
 
 
 @njit_inline
@@ -260,7 +260,7 @@ def _sides_apart(sa, sb, r_ab, t_ab, res):
 
 
 @njit_kernel
-def collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, res):
+def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of two cylinders, certified as in the module notes, with
     res (10,) = [depth, n (3), pa (3), pb (3)] on the cores in A's frame (n from A to
     B); minus the gap (< 0) when a cap's plane or the crossing's proves the cores apart,
@@ -396,3 +396,12 @@ def collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, res):
             return 0.0
     _certified_out(res, h, nx, ny, nz, rim_side, r_ab, t_ab, rpx, rpy, rpz)
     return h
+
+
+@njit_inline
+def collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for two cylinders (constants.PRE_*):
+    PRE_EXACT with res[:10] the cores' certified depth, normal and points
+    (_cylinder_cylinder_bound), PRE_APART when a plane proves the cores farther apart than
+    ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    return pre_outcome(_cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res), stop)

@@ -1,8 +1,8 @@
 """An ellipsoid and a box in closed form, before GJK and EPA: the cores' depth at a box
 face certified by a ball, or the cores' exact distance over a face, an edge or a vertex,
 or a face plane that proves them apart (gjk_epa.gjk_epa_ws calls collide_ellipsoid_box
-first for such a pair; where it decides nothing it returns 0 and GJK and EPA run as for
-any pair).
+first for such a pair; where it decides nothing it returns PRE_UNDECIDED and GJK and EPA
+run as for any pair).
 
 The problem, in the box's frame (half extents e_i, axes x_i): the ellipsoid's core K is
 the ellipsoid E (centre c, shape matrix S = Q diag(a^2, b^2, c^2) Q^T, Q its axes) shrunk
@@ -62,7 +62,8 @@ import math
 
 import numpy as np
 
-from ..constants import BE_EXACT, BE_POINT_ITERS, CC_NEWTON_ITERS, ELLIPSOID, EPA_REL_TOL, P_ROLL
+from ..constants import (BE_EXACT, BE_POINT_ITERS, CC_NEWTON_ITERS, ELLIPSOID, EPA_REL_TOL, P_ROLL,
+                         PRE_APART, PRE_EXACT, PRE_UNDECIDED)
 from ..geometry import borrow_pose, meet
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step
@@ -348,7 +349,7 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
 
 
 @njit_kernel
-def collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res):
+def _ellipsoid_box_bound(sa, sb, r_ab, t_ab, scale, stop, res):
     """The outcomes of the module notes for an ellipsoid and a box (either order; B's
     pose r_ab, t_ab in A's frame; ``stop`` (m, may be inf): a face plane proving the
     cores farther apart than this ends the call with that bound, as GJK's ``stop``).
@@ -443,3 +444,17 @@ def collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res):
         return 0.0, False
     _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, px, py, pz)
     return h, True
+
+
+@njit_inline
+def collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for an ellipsoid and a box (constants.PRE_*):
+    PRE_EXACT with res[:10] the cores' certified depth or exact distance, normal and points
+    (_ellipsoid_box_bound's first two outcomes), PRE_APART when a face plane proves the
+    cores farther apart than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    d, exact = _ellipsoid_box_bound(sa, sb, r_ab, t_ab, scale, stop, res)
+    if exact:
+        return PRE_EXACT
+    if d < 0.0 and -d > stop:
+        return PRE_APART
+    return PRE_UNDECIDED

@@ -72,14 +72,13 @@ import math
 import numpy as np
 
 from ..constants import (ELLIPSOID, FAN_MAX_POINTS, HE_BALL_ITERS, HE_BALL_TOL, HE_FAN_SLACK,
-                         HE_SUPPORT_TOL, P_ROLL)
+                         HE_SUPPORT_TOL, PRE_APART, PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, P_ROLL)
 from ..geometry import borrow_args
 from ..jit import borrow, njit_inline, njit_kernel
 from ..simplex import _closest_simplex
-from .normal_fan import (HE_APART, HE_EXACT, HE_FACES, HE_MAX_FACES, HE_UNDECIDED, HE_UNPROVED,
-                         HE_V, HE_X, _in_arc, _plane_feet, _planes_on_arc, _root_right, _roots_mid,
-                         _vertex_top, face_apart_out, fan_run, fan_stored, hull_pose, least_offset,
-                         plane_foot)
+from .normal_fan import (HE_FACES, HE_MAX_FACES, HE_V, HE_X, _in_arc, _plane_feet, _planes_on_arc,
+                         _root_right, _roots_mid, _vertex_top, face_apart_out, fan_run, fan_stored,
+                         hull_pose, least_offset, plane_foot)
 
 
 @njit_inline
@@ -158,13 +157,13 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
     plane proving the cores farther apart than this ends the call (as GJK's).  ``rows``
     (>= HE_ROWS, 3) and ``roots`` (>= 8,) are scratch.  Returns
 
-    * HE_EXACT with res[:10] = [h, n (3), pa (3), pb (3)] in A's frame (h the cores'
+    * PRE_EXACT with res[:10] = [h, n (3), pa (3), pb (3)] in A's frame (h the cores'
       depth, n from A to B, pa and pb on the two cores, pb - pa == -h n);
-    * HE_APART with res = [-g, n, pa, pb]: the cores are at least g > stop apart, n
+    * PRE_APART with res = [-g, n, pa, pb]: the cores are at least g > stop apart, n
       normal to a plane that separates them (a hull face's or _unit_ball_test's), pa
       and pb points of the cores (_apart_out);
-    * HE_UNPROVED (without ``overlap``, when neither a hull vertex inside E, E's
-      centre inside B nor _unit_ball_test decides) or HE_UNDECIDED otherwise, res
+    * PRE_UNPROVED (without ``overlap``, when neither a hull vertex inside E, E's
+      centre inside B nor _unit_ball_test decides) or PRE_UNDECIDED otherwise, res
       untouched."""
     sa, sb, verts, r_ab, t_ab = borrow_args(sa, sb, verts, r_ab, t_ab)
     rows, roots, res = borrow(rows), borrow(roots), borrow(res)
@@ -174,7 +173,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
     v0, vn = hull[2], hull[3]
     nf, ne, nvx, fnr, fe, fl = fan_run(hull[1], v0, vn, verts)
     if vn > FAN_MAX_POINTS or nf > HE_MAX_FACES:
-        return HE_UNDECIDED
+        return PRE_UNDECIDED
     # the hull's pose in E's frame
     r00, r01, r02, r10, r11, r12, r20, r21, r22, t0, t1, t2 = hull_pose(side, r_ab, t_ab)
     a0, a1, a2 = ell[0] ** 2, ell[1] ** 2, ell[2] ** 2
@@ -202,7 +201,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         if roll - (hA + omin) > stop:
             _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
                        a0, a1, a2, hA, roll, roll - (hA + omin))
-            return HE_APART
+            return PRE_APART
     inside = omin > 0.0
     amin = math.sqrt(min(a0, min(a1, a2)))
     amax = math.sqrt(max(a0, max(a1, a2)))
@@ -232,7 +231,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
             rows[HE_FACES:HE_FACES + 4], rows[HE_FACES + nf], rows[HE_FACES + nf + 1],
             roots[0:4], roots[4:8])
         if ball == 0:
-            return HE_UNPROVED
+            return PRE_UNPROVED
         if ball == 2:
             # the hull's outward normal toward E, m = -n (E's frame), f in the hull's
             mx, my, mz = -nx, -ny, -nz
@@ -242,7 +241,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
             hA = math.sqrt(a0 * mx * mx + a1 * my * my + a2 * mz * mz)
             _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz,
                        a0, a1, a2, hA, roll, roll + gap)
-            return HE_APART
+            return PRE_APART
     U = np.inf
     bx = by = bz = 0.0
     for f in range(nf):
@@ -258,8 +257,8 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
             if roll - val > stop:
                 _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my,
                            mz, a0, a1, a2, hA, roll, roll - val)
-                return HE_APART
-            return HE_UNDECIDED
+                return PRE_APART
+            return PRE_UNDECIDED
         # per face: L m (E's support point along n = -m is -L m / hA), m, hA, o, f(n)
         W[f, 0], W[f, 1], W[f, 2] = a0 * mx, a1 * my, a2 * mz
         M[f, 0], M[f, 1], M[f, 2] = mx, my, mz
@@ -309,7 +308,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         wp, wq = px * vx + py * vy + pz * vz, qx * vx + qy * vy + qz * vz
         k, ux, uy, P0, P1, lam0, lam1 = _plane_feet(g11, g12, g22, wp, wq, U, scale, roots)
         if k < 0:
-            return HE_UNDECIDED
+            return PRE_UNDECIDED
         for r in range(k):
             val, ap, aq = plane_foot(roots[r], P0, P1, lam0, lam1, ux, uy)
             if not val < U:
@@ -333,7 +332,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         i0, i1 = i1, i0
     l0, l1, l2 = lam[i0], lam[i1], lam[i2]
     if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
-        return HE_UNDECIDED
+        return PRE_UNDECIDED
     lmid = l0 / math.sqrt(l2)
     kmid = l1 / (l1 - l0)
     for i in range(nvx):
@@ -355,17 +354,17 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
         small = 1e-24 * l2 * scale * scale
         if not (w0 > small and w1 > small and w2 > small):
-            return HE_UNDECIDED
+            return PRE_UNDECIDED
         k = 0
         if j0:
             roots[0], ok = _root_right(l0, l1, l2, w0, w1, w2)
             if not ok:
-                return HE_UNDECIDED
+                return PRE_UNDECIDED
             k = 1
         if mid:
             km = _roots_mid(l0, l1, l2, w0, w1, w2, roots, k)
             if km < 0:
-                return HE_UNDECIDED
+                return PRE_UNDECIDED
             k += km
         for r in range(k):
             tt = roots[r]
@@ -391,13 +390,13 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
     # E's support point along n, and B's, U back along n
     ex, ey, ez = a0 * bx * ih, a1 * by * ih, a2 * bz * ih
     if not math.isfinite(U):
-        return HE_UNDECIDED
+        return PRE_UNDECIDED
     if side == 0:
         res[0] = U - roll
         res[1], res[2], res[3] = bx, by, bz
         res[4], res[5], res[6] = ex - roll * bx, ey - roll * by, ez - roll * bz
         res[7], res[8], res[9] = ex - U * bx, ey - U * by, ez - U * bz
-        return HE_EXACT
+        return PRE_EXACT
     # back to A's (the hull's) frame: n from A to B is -r_ab n
     hx, hy, hz = ex - U * bx, ey - U * by, ez - U * bz
     res[0] = U - roll
@@ -407,4 +406,4 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         res[4 + c] = r_ab[c, 0] * hx + r_ab[c, 1] * hy + r_ab[c, 2] * hz + t_ab[c]
         res[7 + c] = (r_ab[c, 0] * ex + r_ab[c, 1] * ey + r_ab[c, 2] * ez + t_ab[c]
                       + roll * nA)
-    return HE_EXACT
+    return PRE_EXACT

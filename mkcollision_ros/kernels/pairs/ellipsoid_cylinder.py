@@ -1,8 +1,8 @@
 """Penetration depth of an ellipsoid and a cylinder whose cores overlap, certified by
 the ball of cylinder_common.py, before GJK and EPA (gjk_epa.gjk_epa_ws calls
 ``collide_ellipsoid_cylinder`` first for such a pair; where nothing is certified it
-returns 0 and GJK and EPA run as for any pair).  The candidates and the measurements:
-collide_ellipsoid_cylinder's docstring.
+returns PRE_UNDECIDED and GJK and EPA run as for any pair).  The candidates and the
+measurements: _ellipsoid_cylinder_bound's docstring.
 """
 import math
 
@@ -10,7 +10,7 @@ from ..constants import CC_NEWTON_ITERS, CYLINDER, EPA_REL_TOL, P_ROLL
 from ..geometry import borrow_pose, cylinder_inradius
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import (_cap_test, _certified_out, _frame, _past_side, _side_normal,
-                              gap_newton_step)
+                              gap_newton_step, pre_outcome)
 
 
 @njit_inline
@@ -24,11 +24,11 @@ def _k_point(cx, cy, cz, s00, s01, s02, s11, s12, roll, cs, sn, rs):
 
 
 @njit_kernel
-def collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, res):
+def _ellipsoid_cylinder_bound(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of an ellipsoid and a cylinder (either order), certified by
-    the ball of cylinder_common.py, with res (10,) as collide_cylinder_cylinder's, or minus
+    the ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus
     the gap (< 0) when a
-    plane proves the cores apart (as collide_cylinder_cylinder); 0 (res untouched) when neither.
+    plane proves the cores apart (as _cylinder_cylinder_bound); 0 (res untouched) when neither.
     The ellipsoid's core K is the
     ellipsoid E shrunk by its rolling radius r (geometry: h_K(u) = h_E(u) - r |u|); in
     the cylinder's frame E's shape matrix is S = Q diag(a^2, b^2, c^2) Q^T (Q its axes),
@@ -122,3 +122,12 @@ def collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, res):
     nx, ny, nz = _side_normal(side, r_ab, cs, sn)
     _certified_out(res, h, nx, ny, nz, side, r_ab, t_ab, px, py, pz)
     return h
+
+
+@njit_inline
+def collide_ellipsoid_cylinder(sa, sb, r_ab, t_ab, scale, stop, res):
+    """What gjk_epa.gjk_epa_ws learns before GJK for an ellipsoid and a cylinder
+    (constants.PRE_*): PRE_EXACT with res[:10] the cores' certified depth, normal and
+    points (_ellipsoid_cylinder_bound), PRE_APART when a plane proves the cores farther
+    apart than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
+    return pre_outcome(_ellipsoid_cylinder_bound(sa, sb, r_ab, t_ab, scale, res), stop)

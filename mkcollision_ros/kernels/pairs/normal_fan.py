@@ -6,9 +6,8 @@ plane (``face_apart_out``), a vertex's support test (``_vertex_top``), the arc t
 and bounds of an edge (``_in_arc``, ``_planes_on_arc``, ``_sinus_min``), and the feet
 of the normals from a point to an ellipse or an ellipsoid (``_plane_feet``,
 ``plane_foot`` and the root searches ``_newton_from``, ``_root_right``,
-``_roots_mid``).  Their scratch rows (HE_V, HE_FACES, HE_X, HE_ROWS) and outcome codes
-(HE_APART, HE_EXACT, HE_UNPROVED, HE_UNDECIDED) are below; their caps and tolerances
-(HE_*) are in constants.py.
+``_roots_mid``).  Their scratch rows (HE_V, HE_FACES, HE_X, HE_ROWS) are below; their
+outcome codes (PRE_*), caps and tolerances (HE_*) are in constants.py.
 
 A foot is a root t of the secular equation sum_i w_i / (l_i + t)^2 = 1 (w_i = l_i P_i^2,
 P the point in the ellipse's or E's axes); the normal there is N_i = P_i / (l_i + t) and
@@ -32,10 +31,6 @@ HE_V = 0               # scratch rows (collide_ellipsoid_convex's ``rows``): the
 HE_FACES = HE_V + FAN_MAX_POINTS  # ... per face m (a face's normal, E's frame) times
 HE_X = HE_FACES + 3 * HE_MAX_FACES  # L, then m, then (h_E(m), offset, f(-m)); then per
 HE_ROWS = HE_X + FAN_MAX_POINTS      # point (its ellipsoid norm rho in E, -, -)
-HE_APART = 2           # collide_ellipsoid_convex's outcomes: apart by more than ``stop``
-HE_EXACT = 1           # ... the depth, exact
-HE_UNPROVED = 0        # ... nothing, for want of a proof that the pair overlaps
-HE_UNDECIDED = -1      # ... nothing (a case left to GJK/EPA)
 
 
 @njit_inline

@@ -4,7 +4,11 @@
 * a coal adapter (peer oracle): ``coal_signed_distance(shape_a, pose_a, shape_b, pose_b)``
   -> (distance, normal A->B, point_a, point_b), world frame;
 * implicit functions / support functions in numpy, to check that witness points lie on
-  the surfaces.
+  the surfaces, and an ellipsoid's exact inner distance (``inner_distance``);
+* runners the test files share: one pair through GJK/EPA (``gjk``, ``pose``, ``ID``),
+  the batch kernel on many (``run_batch``, ``paired_table``, ``table_pair``), and the
+  pair kernels run before GJK, called directly (``pre_kernel``,
+  ``check_certified_shortcut``).
 
 coal conventions verified here (coal 3.0.3): Box takes full side lengths; Capsule(r, L)
 with L the full segment length; Cylinder(r, h) and Cone(r, h) with h the full height,
@@ -16,7 +20,8 @@ import math
 
 import numpy as np
 
-from mkcollision_ros import rotations
+from mkcollision_ros import collide, rotations
+from mkcollision_ros.kernels.constants import OUT_DIST, OUT_NORMAL, OUT_PA, OUT_PB, ST_PENETRATING
 
 TYPES = ("sphere", "ellipsoid", "box", "capsule", "cylinder", "cone", "convex")
 
@@ -358,3 +363,186 @@ def signed_distance_oracle(shape_a, pose_a, shape_b, pose_b, n_start=4000, n_kee
     # u is the outward normal of A - B: the normal from A to B in both regimes.
     # -best_h is a lower bound of the true signed distance (h(u) >= min h).
     return -best_h, best_u
+
+
+# --- runners shared by the narrow-phase test files ---------------------------------------
+ID = ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])
+
+
+def gjk(sa, pa, sb, pb):
+    return collide(sa, pa, sb, pb, method="gjk_epa")
+
+
+def pose(p, q=(0.0, 0.0, 0.0, 1.0)):
+    return (list(p), list(q))
+
+
+def pressed_in(shape, ell, pe, shape_is_a, scale):
+    """GJK/EPA on ``shape`` (at the origin) and the ellipsoid ``ell`` at pose ``pe``,
+    either as A: the pair must penetrate, and its depth must not exceed the slow
+    oracle's direction search (both are upper bounds of the true depth).  Returns the
+    result, its normal turned out of ``shape`` and h_{shape - ell} along it."""
+    res = gjk(shape, ID, ell, pe) if shape_is_a else gjk(ell, pe, shape, ID)
+    assert res.status == ST_PENETRATING
+    want, _ = (signed_distance_oracle(shape, ID, ell, pe) if shape_is_a
+               else signed_distance_oracle(ell, pe, shape, ID))
+    assert res.distance >= want - 1e-9 * scale
+    n = np.asarray(res.normal) * (1.0 if shape_is_a else -1.0)
+    return res, n, cso_support(shape, ID, ell, pe, n[None])[0]
+
+
+def inner_distance(centre, sigma, p):
+    """Distance from a point p inside the ellipsoid (or ellipse) {x : (x - centre)^T
+    sigma^-1 (x - centre) <= 1} to its boundary, by bisection on the Lagrange
+    multiplier t of the nearest boundary point x_i = a_i^2 y_i / (a_i^2 + t) (principal
+    frame, y = p - centre there): sum (a_i y_i / (a_i^2 + t))^2 = 1 has one root in
+    (-min a_i^2, 0] for a point inside, which falls strictly there.  Returns the
+    distance and the boundary's outward unit normal at that nearest point."""
+    w, q = np.linalg.eigh(np.asarray(sigma, dtype=float))
+    y = q.T @ (np.asarray(p, dtype=float) - np.asarray(centre, dtype=float))
+    lo, hi = -w.min(), 0.0
+    assert np.sum(y * y / w) < 1.0
+    for _ in range(200):
+        t = 0.5 * (lo + hi)
+        if np.sum(w * (y / (w + t)) ** 2) > 1.0:
+            lo = t
+        else:
+            hi = t
+    x = w * y / (w + hi)
+    n = q @ (x / w)
+    return float(np.linalg.norm(x - y)), n / np.linalg.norm(n)
+
+
+def hull_cylinder_first(sa, sb, verts, r_ab, t_ab, scale, res):
+    """What gjk_epa_ws tries first for a cylinder and a hull (contacts mode), as an
+    outcome code (constants.PRE_*): collide_cylinder_convex's exact depth or separating
+    plane when the hull has its fan stored (stop: the inflation radii and the touching
+    band), collide_cylinder_convex_ball (stop 0) where that decides nothing
+    (PRE_UNDECIDED) or there is no fan."""
+    from mkcollision_ros.kernels.constants import PRE_UNDECIDED, TOUCH_TOL
+    from mkcollision_ros.kernels.geometry import inflation
+    from mkcollision_ros.kernels.pairs.cylinder_convex import (collide_cylinder_convex,
+                                                               collide_cylinder_convex_ball,
+                                                               cylinder_hull_pair)
+    from mkcollision_ros.kernels.pairs.normal_fan import HE_ROWS
+    got = PRE_UNDECIDED
+    if cylinder_hull_pair(sa, sb):
+        stop = inflation(sa[0], sa[1]) + inflation(sb[0], sb[1]) + TOUCH_TOL * scale
+        got = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
+                                      np.zeros((HE_ROWS, 3)), np.zeros(8), res)
+    if got == PRE_UNDECIDED:
+        got = collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, 0.0, res)
+    return got
+
+
+def pre_kernel(kinds):
+    """The pair kernel before GJK for a cylinder and the other kind of ``kinds``
+    (collide_box_cylinder for a box; collide_ellipsoid_box for an ellipsoid and a box;
+    for a hull, collide_cylinder_convex first, hull_cylinder_first), as f(shape_a,
+    shape_b, verts, r_ab, t_ab, scale, res) giving res[0] on PRE_EXACT or PRE_APART (a
+    certified core depth > 0, an exact distance or a proved gap, minus it) and 0 on any
+    other outcome.  Those called with a ``stop`` get 0, so that every gap they prove
+    counts."""
+    from mkcollision_ros.kernels.constants import BC_MAX_LEVEL, PRE_APART, PRE_EXACT
+    from mkcollision_ros.kernels.pairs.box_cylinder import collide_box_cylinder
+    from mkcollision_ros.kernels.pairs.capsule_cylinder import collide_capsule_cylinder
+    from mkcollision_ros.kernels.pairs.cylinder_cylinder import collide_cylinder_cylinder
+    from mkcollision_ros.kernels.pairs.ellipsoid_box import collide_ellipsoid_box
+    from mkcollision_ros.kernels.pairs.ellipsoid_cylinder import collide_ellipsoid_cylinder
+    other = kinds[0] if kinds[1] == "cylinder" else kinds[1]
+    if sorted(kinds) == ["box", "ellipsoid"]:
+        def run(sa, sb, verts, r_ab, t_ab, scale, res):
+            return collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, 0.0, res)
+    elif other == "cylinder":
+        def run(sa, sb, verts, r_ab, t_ab, scale, res):
+            return collide_cylinder_cylinder(sa, sb, verts, r_ab, t_ab, scale, 0.0, res)
+    elif other == "box":
+        def run(sa, sb, verts, r_ab, t_ab, scale, res):
+            return collide_box_cylinder(sa, sb, r_ab, t_ab, scale,
+                                        np.zeros((BC_MAX_LEVEL + 8, 3)), 0.0, res)
+    elif other == "convex":
+        run = hull_cylinder_first
+    else:
+        f = collide_capsule_cylinder if other == "capsule" else collide_ellipsoid_cylinder
+
+        def run(sa, sb, verts, r_ab, t_ab, scale, res):
+            return f(sa, sb, r_ab, t_ab, scale, 0.0, res)
+
+    def shortcut(sa, sb, verts, r_ab, t_ab, scale, res):
+        got = run(sa, sb, verts, r_ab, t_ab, scale, res)
+        return res[0] if got == PRE_EXACT or got == PRE_APART else 0.0
+    return shortcut
+
+
+def check_certified_shortcut(seed, kinds, n_oracle, h_slack):
+    """800 random pairs of the two kinds through the batch kernel; on each penetrating
+    pair that pre_kernel(kinds) (called directly)
+    certifies: the batch kernel reports its core depth grown by the inflation radii,
+    h_{A-B}(normal) by the numpy oracle is that depth to within h_slack * scale and
+    never below it, the witnesses lie on the two surfaces, and (on the first n_oracle)
+    the depth is never deeper than the slow oracle's minimum of h over directions (a
+    wrong certificate, a ball that is not inside, would report a depth above the true
+    one).  Returns (pairs certified, pairs penetrating, the certified pairs' (core
+    normal in A's frame, r_ab))."""
+    from mkcollision_ros.kernels.geometry import inflation, quat_to_matrix, relative_pose
+    from mkcollision_ros.shapes import build_table
+    shortcut = pre_kernel(kinds)
+    rng = np.random.default_rng(seed)
+    sa, pa, qa, sb, pb, qb = random_pairs(rng, *kinds, 800, offset=(0.0, 0.8))
+    out, st = run_batch(sa, pa, qa, sb, pb, qb)
+    pen = np.flatnonzero(st == ST_PENETRATING)
+    certified = 0
+    found = []
+    for k in pen:
+        table = build_table([sa[k], sb[k]])
+        qa_k, qb_k = (q / np.linalg.norm(q) for q in (qa[k], qb[k]))
+        r_ab, t_ab = relative_pose(pa[k], quat_to_matrix(qa_k), pb[k], quat_to_matrix(qb_k))
+        shapes = [(table.codes[i], table.params[i], table.vrange[i, 0], table.vrange[i, 1])
+                  for i in range(2)]
+        scale = table.params[0, 7] + table.params[1, 7]
+        res = np.zeros(10)
+        h_core = shortcut(shapes[0], shapes[1], table.verts, r_ab, t_ab, scale, res)
+        if not h_core > 0.0:
+            continue
+        certified += 1
+        found.append((res[1:4].copy(), r_ab))
+        grown = sum(inflation(table.codes[i], table.params[i]) for i in range(2))
+        depth = -out[k, OUT_DIST]
+        assert abs(depth - (h_core + grown)) <= 1e-12 * scale
+        a, pose_a, b, pose_b = sa[k], (pa[k], qa_k), sb[k], (pb[k], qb_k)
+        nrm = out[k, OUT_NORMAL:OUT_NORMAL + 3]
+        h = cso_support(a, pose_a, b, pose_b, nrm[None])[0]
+        assert -1e-12 * scale <= h - depth <= (h_slack + 1e-12) * scale
+        assert abs(surface_gap(a, pose_a, out[k, OUT_PA:OUT_PA + 3], nrm)) <= 1e-9 * scale
+        assert abs(surface_gap(b, pose_b, out[k, OUT_PB:OUT_PB + 3], -nrm)) <= 1e-9 * scale
+        if certified <= n_oracle:
+            sd, _ = signed_distance_oracle(a, pose_a, b, pose_b, n_start=2000, n_keep=6,
+                                             n_iter=200)
+            assert depth <= -sd + 1e-8 * scale
+    return certified, len(pen), found
+
+
+def paired_table(sa, pa, qa, sb, pb, qb):
+    """One table of the shapes sa then sb, with pairs (k, k + n), positions and unit
+    quaternions in that order, as the batch kernel takes them: (table, pairs, pos, quat,
+    n)."""
+    from mkcollision_ros.shapes import build_table
+    n = len(sa)
+    table = build_table(list(sa) + list(sb))
+    pairs = np.stack([np.arange(n), np.arange(n) + n], axis=1).astype(np.int64)
+    quat = np.concatenate([qa, qb])
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    pos = np.ascontiguousarray(np.concatenate([pa, pb]))
+    return table, pairs, pos, quat, n
+
+
+def table_pair(table, pos, quat, k, n):
+    """Pair k of a table whose shapes k and k + n are paired: the two shape tuples, the
+    pair's scale and B's pose in A's frame (r_ab, t_ab)."""
+    from mkcollision_ros.kernels.geometry import quat_to_matrix, relative_pose
+    shapes = [(table.codes[i], table.params[i], table.vrange[i, 0], table.vrange[i, 1])
+              for i in (k, k + n)]
+    scale = table.params[k, 7] + table.params[k + n, 7]
+    r_ab, t_ab = relative_pose(pos[k], quat_to_matrix(quat[k]), pos[k + n],
+                               quat_to_matrix(quat[k + n]))
+    return shapes, scale, r_ab, t_ab

@@ -311,7 +311,7 @@ def test_box_capsule_closed_form_matches_gjk_epa_when_deep():
         assert np.dot(ra.normal, rg.normal) > math.cos(1e-3), (box, cap, pose_b)
 
 
-# --- sphere-cylinder (closed form added for speed; must match GJK/EPA and the exact sdf) ---
+# --- sphere-cylinder closed form: against GJK/EPA and the exact sdf -----------------------
 def _sdf_cylinder(shape, p):
     """Exact signed distance of a body-frame point to a (rounded) cylinder."""
     rr, h = shape["radius"], 0.5 * shape["height"]

@@ -9,9 +9,10 @@ import pytest
 
 from mkcollision_ros.cases import pair_cases, relative_poses
 from mkcollision_ros.kernels import constants as C
+from mkcollision_ros.kernels.constants import PRE_APART, PRE_EXACT, PRE_UNPROVED
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
 from mkcollision_ros.kernels.pairs.cylinder_convex import collide_cylinder_convex
-from mkcollision_ros.kernels.pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED
+from mkcollision_ros.kernels.pairs.normal_fan import HE_ROWS
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table
 
@@ -63,7 +64,7 @@ def test_closed_forms_of_hand_placed_pairs(swap):
     cases[1] = (OCTA, r2, t2, d, [0.0, 0.0, 1.0], lowest + t2)
     for pts, rt, tr, depth, n, pb in cases:
         got, res = _hand(pts, rt, tr, swap)
-        assert got == HE_EXACT
+        assert got == PRE_EXACT
         assert abs(res[0] - depth) < 1e-12
         if not swap:
             assert np.allclose(res[1:4], n, atol=1e-12)
@@ -93,7 +94,7 @@ def test_hand_placed_edge_into_the_rim_and_apart_pairs():
     out = np.zeros(C.OUT_SIZE)
     gjk_epa(sc, sh, plain.verts, rot, tr, out)
     assert out[C.OUT_DIST] < -1e-3
-    assert got == HE_EXACT and abs(res[0] + out[C.OUT_DIST]) < 1e-8
+    assert got == PRE_EXACT and abs(res[0] + out[C.OUT_DIST]) < 1e-8
     n = res[1:4]
     assert abs(n[2]) > 0.2 and np.hypot(n[0], n[1]) > 0.2      # a rim's normal
     assert np.max(np.abs(rot.T @ n)) < 0.99                     # not a box face's
@@ -104,7 +105,7 @@ def test_hand_placed_edge_into_the_rim_and_apart_pairs():
     for tr2 in ([0.0, 0.0, 2.6], [1.8, 0.0, 0.0]):
         got, res = _hand(box, np.eye(3), tr2, stop=0.1)
         gjk_epa(sc, sh, plain.verts, np.eye(3), np.array(tr2), out)
-        assert got == HE_APART and 0.1 < -res[0] <= out[C.OUT_DIST] + 1e-12
+        assert got == PRE_APART and 0.1 < -res[0] <= out[C.OUT_DIST] + 1e-12
 
 
 @pytest.mark.parametrize("swap", [False, True])
@@ -130,9 +131,9 @@ def test_gjk_decides_pairs_no_vertex_centre_or_plane_proves(swap):
         dist = out[C.OUT_DIST]
         got, res = _hand(box, rot, tr, swap, stop=stop)
         if dist < 0.0:
-            assert dist < -0.1 and got == HE_EXACT and abs(res[0] + dist) < 1e-8
+            assert dist < -0.1 and got == PRE_EXACT and abs(res[0] + dist) < 1e-8
             continue
-        assert dist > 0.1 and got == HE_APART
+        assert dist > 0.1 and got == PRE_APART
         gap = -res[0]
         assert stop < gap <= dist + 1e-12
         n = res[1:4]
@@ -165,9 +166,9 @@ def _pair_runs(n, seed, margin, swap):
         args = (sa, sb, fan.verts, R[0], T[0], scale)
         first = collide_cylinder_convex(*args, False, 0.0, rows, roots, res)
         got = first
-        if first == HE_UNPROVED and depth > 2 * margin + 1e-9 * scale:
+        if first == PRE_UNPROVED and depth > 2 * margin + 1e-9 * scale:
             got = collide_cylinder_convex(*args, True, 0.0, rows, roots, res)
-        runs.append((depth, first, got == HE_EXACT, res[0] + 2 * margin, res[1:4].copy(),
+        runs.append((depth, first, got == PRE_EXACT, res[0] + 2 * margin, res[1:4].copy(),
                      out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
                      np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale,
                      res.copy()))
@@ -182,7 +183,7 @@ def test_exact_depth_matches_gjk_epa(swap, margin):
     assert len(cores) > 60
     # its own proofs (_cyl_gjk's the last) hold only for overlapping pairs, and prove
     # nearly all of them (the rest: GJK's proof, then the kernel again, or EPA)
-    proved = [r for r in runs if r[1] == HE_EXACT]
+    proved = [r for r in runs if r[1] == PRE_EXACT]
     assert all(r[0] > 2 * margin for r in proved)
     assert len(proved) >= 0.98 * len(cores)
     assert sum(r[2] for r in cores) >= 0.98 * len(cores)
@@ -198,7 +199,7 @@ def test_planes_prove_pairs_apart(swap):
     margin = 0.02
     runs = _pair_runs(300, 51 + swap, margin, swap)
     apart = [r for r in runs if r[0] < 2 * margin - 1e-9 * r[7]]
-    out = [r for r in runs if r[1] == HE_APART]
+    out = [r for r in runs if r[1] == PRE_APART]
     # (a face's plane, the side's or a cap's, or else _cyl_gjk's)
     assert len(apart) > 60 and len(out) >= 0.98 * len(apart)
     for depth, _, _, h, n, _, _, scale, res in out:

@@ -10,9 +10,10 @@ import pytest
 from mkcollision_ros.cases import pair_cases, relative_poses
 from mkcollision_ros.hull import FAN_MAX_POINTS, fan_rows
 from mkcollision_ros.kernels import constants as C
+from mkcollision_ros.kernels.constants import PRE_APART, PRE_EXACT, PRE_UNPROVED
 from mkcollision_ros.kernels.gjk_epa import gjk_epa
 from mkcollision_ros.kernels.pairs.ellipsoid_convex import collide_ellipsoid_convex
-from mkcollision_ros.kernels.pairs.normal_fan import HE_APART, HE_EXACT, HE_ROWS, HE_UNPROVED
+from mkcollision_ros.kernels.pairs.normal_fan import HE_ROWS
 from mkcollision_ros.kernels.narrowphase import collide_batch
 from mkcollision_ros.shapes import build_table, point_count, shape_row
 
@@ -96,10 +97,10 @@ def _pair_runs(n, seed, margin, swap):
         args = (sa, sb, fan.verts, R[0], T[0], scale)
         first = collide_ellipsoid_convex(*args, False, 0.0, rows, roots, res)
         got = first
-        if first == HE_UNPROVED and depth > roll + 2 * margin + 1e-9 * scale:
+        if first == PRE_UNPROVED and depth > roll + 2 * margin + 1e-9 * scale:
             got = collide_ellipsoid_convex(*args, True, 0.0, rows, roots, res)
         full = res[0] + roll + 2 * margin           # both margins
-        runs.append((depth, roll, first, got == HE_EXACT, full, res[1:4].copy(),
+        runs.append((depth, roll, first, got == PRE_EXACT, full, res[1:4].copy(),
                      out[C.OUT_NORMAL:C.OUT_NORMAL + 3].copy(),
                      np.linalg.norm(res[7:10] - res[4:7] + res[0] * res[1:4]), scale,
                      res.copy()))
@@ -116,9 +117,9 @@ def test_exact_depth_matches_gjk_epa(swap, margin):
     assert len(cores) > 60
     # its own proof holds only for overlapping pairs, and (with GJK in E's unit-ball
     # frame where no vertex or centre proves it) proves nearly all of them
-    proved = [r for r in runs if r[2] == HE_EXACT]
+    proved = [r for r in runs if r[2] == PRE_EXACT]
     assert all(r[0] > 2 * margin for r in proved)
-    assert sum(r[2] == HE_EXACT for r in cores) >= 0.98 * len(cores)
+    assert sum(r[2] == PRE_EXACT for r in cores) >= 0.98 * len(cores)
     # with GJK's proof, it decides nearly all of them (the rest go on to EPA)
     assert sum(r[3] for r in cores) >= 0.95 * len(cores)
     for depth, _, _, dec, h, n, n_ref, resid, scale, _ in runs:
@@ -135,7 +136,7 @@ def test_planes_prove_pairs_apart(swap):
     # cores apart by GJK/EPA (the distance of the cores: the ellipsoid less its
     # rolling radius, both margins off)
     apart = [r for r in runs if r[0] < r[1] + 2 * margin - 1e-9 * r[8]]
-    out = [r for r in runs if r[2] == HE_APART]
+    out = [r for r in runs if r[2] == PRE_APART]
     assert len(apart) > 60 and len(out) >= 0.95 * len(apart)
     for depth, roll, _, _, h, n, _, _, scale, res in out:
         gap = -(h - roll - 2 * margin)           # res[0] = -gap, for the cores
@@ -227,7 +228,7 @@ def test_unit_ball_gjk_decides_pairs_no_vertex_or_centre_proves(swap):
     # E less its rolling radius, are apart here); the depth is then exact
     for lo, hi in (([0.5, -3.0, 0.3], [1.5, 3.0, 1.3]), ([-0.2, -3.0, 0.4], [0.2, 3.0, 1.4])):
         got, res, out, scale, roll = _first_call(lo, hi, swap, np.inf)
-        assert got == HE_EXACT
+        assert got == PRE_EXACT
         assert abs(res[0] + roll + out[C.OUT_DIST]) <= 1e-9 * scale
         assert np.arccos(np.clip(res[1:4] @ out[C.OUT_NORMAL:C.OUT_NORMAL + 3], -1, 1)) < 1e-6
     # the bar's edge at x = 0.8, z = 0.5: E reaches beyond both its faces' planes (x up
@@ -237,7 +238,7 @@ def test_unit_ball_gjk_decides_pairs_no_vertex_or_centre_proves(swap):
     # itself (not only its core) apart from the bar ends the call
     got, res, out, scale, roll = _first_call([0.8, -3.0, 0.5], [1.8, 3.0, 1.5], swap, 0.36)
     gap = -res[0]                                     # the cores' (E less its roll)
-    assert got == HE_APART and out[C.OUT_DIST] > 0.0 and roll == pytest.approx(0.36)
+    assert got == PRE_APART and out[C.OUT_DIST] > 0.0 and roll == pytest.approx(0.36)
     assert roll < gap <= out[C.OUT_DIST] + roll + 1e-9 * scale
     n = res[1:4]
     assert abs(np.linalg.norm(n) - 1.0) < 1e-12

@@ -1,4 +1,4 @@
-"""Regression corpus (issue 3): configurations reported as failing against other collision
+"""Regression corpus: configurations reported as failing against other collision
 libraries (fcl, libccd, coal, parry, Jolt, MuJoCo), re-derived as scenes with our own
 expected values.
 

@@ -47,8 +47,8 @@ same with A and B exchanged.  For "mpr": not FAILED, never NaN, the touching fla
 scale) and, when it reports separated, its distance a lower bound (0 <= d_mpr <= d).
 
 Bugs found in this library itself get a scene too, named ``mkc_*``, with "found here"
-and the date as source (the issue: every bug found gets its saved scene and a test
-naming it): mkc_epa_polish_wrong_basin_ellipsoid_cone (Newton's method in EPA keeping a
+and how it was found as source (every bug found gets its saved scene and a test naming
+it): mkc_epa_polish_wrong_basin_ellipsoid_cone (Newton's method in EPA keeping a
 shallower local minimum, which an oracle search stopping at a local minimum misses too),
 mkc_kink_newton_wrong_basin_cylinder_cylinder and
 mkc_kink_newton_close_basin_capsule_cylinder (Newton's method along the creases of

@@ -43,8 +43,8 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, PLANE, PLANE_AXIS_TOL, P_MARGIN,
-                        SPHERE)
+from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, NO_DIRECTION, PLANE,
+                        PLANE_AXIS_TOL, P_MARGIN, SPHERE)
 from .jit import njit_kernel, njit_parallel, prange
 
 # grid cell edge = this x the mean largest AABB extent of the bodies (dimensionless)
@@ -519,7 +519,7 @@ def normalise_poses(pos_w, quat_w, quat_out):
                 return i, 2
             s += v * v
         nrm = math.sqrt(s)
-        if not nrm > 1e-12:
+        if not nrm > NO_DIRECTION:
             return i, 3
         for k in range(4):
             quat_out[i, k] = quat_w[i, k] / nrm

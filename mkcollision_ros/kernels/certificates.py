@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from .constants import (BOX, CYLINDER, ELLIPSOID, EPA_FACE_CAP_MAX, EPA_POLISH_CAP,
-                        EPA_VERTEX_CAP_MIN, P_ROLL)
+                        EPA_VERTEX_CAP_MIN, P_ROLL, ROLL_SHRINK)
 from .geometry import borrow_pose
 from .gjk_epa_workspace import _T_MIN_D, _T_MIN_W, _T_MIN_WA, _T_MIN_WB, _dot
 from .jit import njit_inline, njit_kernel
@@ -135,7 +135,7 @@ def _rolling_ball(side, sa, sb, r_ab, x, y, z, nx, ny, nz):
         my = r_ab[0, 1] * nx + r_ab[1, 1] * ny + r_ab[2, 1] * nz
         mz = r_ab[0, 2] * nx + r_ab[1, 2] * ny + r_ab[2, 2] * nz
     cmin = min(a, min(b, c))
-    rho = (1.0 - 1e-12) * cmin * cmin / math.sqrt(
+    rho = (1.0 - ROLL_SHRINK) * cmin * cmin / math.sqrt(
         a * a * mx * mx + b * b * my * my + c * c * mz * mz) - prm[P_ROLL]
     if not rho > 0.0:
         return x, y, z, 0.0

@@ -53,9 +53,9 @@ import math
 
 import numpy as np
 
-from .constants import (ELL_MAX_ITERS, ELLIPSOID, M_ELLIPSOID_EXACT, M_ELLIPSOID_SAMPLED,
-                        OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
-                        P_MARGIN, SPHERE, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED,
+from .constants import (ELLIPSOID, ELL_MAX_ITERS, JACOBI_OFF_TOL, JACOBI_SWEEPS, M_ELLIPSOID_EXACT,
+                        M_ELLIPSOID_SAMPLED, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA,
+                        OUT_PB, P_MARGIN, SPHERE, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED,
                         ST_TOUCHING, TOUCH_TOL)
 from .jit import njit_kernel
 
@@ -203,10 +203,10 @@ def _sym_eig3(m):
     Returns (eigenvalues (3,), eigenvectors as columns (3, 3))."""
     a = m.copy()
     v = np.eye(3)
-    for sweep in range(50):
+    for sweep in range(JACOBI_SWEEPS):
         off = a[0, 1] * a[0, 1] + a[0, 2] * a[0, 2] + a[1, 2] * a[1, 2]
         diag = a[0, 0] * a[0, 0] + a[1, 1] * a[1, 1] + a[2, 2] * a[2, 2]
-        if off <= 1e-36 * diag:
+        if off <= JACOBI_OFF_TOL * diag:
             break
         for p in range(2):
             for q in range(p + 1, 3):

@@ -59,9 +59,10 @@ import math
 import numpy as np
 
 from .certificates import _pending_bound, _polish_is_global, _vertex_cap
-from .constants import (BOX, CAPSULE, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL, EPA_FACE_EVALS,
-                        EPA_FACE_TOL, EPA_MAX_FACES, EPA_MAX_ITERS, EPA_POLISH_TOL, EPA_REL_TOL,
-                        SPHERE)
+from .constants import (BARY_SLACK, BOX, CAPSULE, CYLINDER, ELLIPSOID, EPA_DEGEN_TOL,
+                        EPA_FACE_EVALS, EPA_FACE_TOL, EPA_MAX_FACES, EPA_MAX_ITERS,
+                        EPA_PATTERN_STEP, EPA_PATTERN_STEP_MIN, EPA_POLISH_RETRY, EPA_POLISH_TOL,
+                        EPA_REL_TOL, EPA_SLIVER_BARY, SPHERE)
 from .geometry import borrow_args, meet, minkowski_core_xyz
 from .gjk_epa_workspace import (_CAND, _FD, _FN, _FS_ROWS, _IA, _IC, _IE, _IF, _IH, _IS, _L3,
                                 _NVMAX, _RES, _T_BEST_DIR, _T_BEST_W, _T_BEST_WA, _T_BEST_WB,
@@ -217,9 +218,9 @@ def _polish_min_support(sa, sb, verts, r_ab, t_ab, scale, ud, uwa, ub, ws):
     ud, uwa, ws = borrow(ud), borrow(uwa), borrow_gjk_workspace(ws)
     d, wa, wb, w = ws[0][_T_PAT_D], ws[0][_T_PAT_WA], ws[0][_T_PAT_WB], ws[0][_T_PAT_W]
     e1, e2 = ws[0][_T_PAT_E1], ws[0][_T_PAT_E2]
-    step = 1e-2
+    step = EPA_PATTERN_STEP
     it = 0
-    while step > 1e-10 and it < 4 * EPA_MAX_ITERS:
+    while step > EPA_PATTERN_STEP_MIN and it < 4 * EPA_MAX_ITERS:
         e1[0], e1[1], e1[2], e2[0], e2[1], e2[2] = _tangent_basis(ud[0], ud[1], ud[2])
         improved = False
         for m in range(8):
@@ -485,7 +486,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
             vtx = eb and kc == -1 and not pend
             if kc >= 0 or ((smooth or two_cyl or vtx) and kc == -1):
                 tries -= 1
-                polish_at *= 0.01
+                polish_at *= EPA_POLISH_RETRY
                 if kc >= 0:
                     k_pol = _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws,
                                          kc // 3, kc % 3)
@@ -646,10 +647,11 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
               + nz * (cx * ay - cy * ax)) / nn
         m2 = 1.0 - m0 - m1
         # inside the face: the witnesses are convex combinations of support points
-        clean = min(m0, min(m1, m2)) >= -1e-9 and max(m0, max(m1, m2)) <= 1.0 + 1e-9
+        clean = min(m0, min(m1, m2)) >= -BARY_SLACK and max(m0, max(m1, m2)) <= 1.0 + BARY_SLACK
         # far outside the face means a sliver face: the clamped closest point instead
         # (as for a degenerate face)
-        on_face = min(m0, min(m1, m2)) > -0.1 and max(m0, max(m1, m2)) < 1.1
+        on_face = (min(m0, min(m1, m2)) > -EPA_SLIVER_BARY
+                   and max(m0, max(m1, m2)) < 1.0 + EPA_SLIVER_BARY)
         if on_face:
             l3[0], l3[1], l3[2] = m0, m1, m2
     if not on_face:

@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, P_GROUPS,
-                        P_MARGIN, P_RADIUS, P_ROLL, PLANE, SPHERE)
+from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, PLANE, P_GROUPS, P_MARGIN,
+                        P_RADIUS, P_ROLL, SPHERE, SUPPORT_TIE)
 from .jit import borrow, njit_inline, njit_kernel
 
 
@@ -206,7 +206,7 @@ def _grouped_support(prm, verts, v0, vn, dx, dy, dz):
             top = g
     best = -np.inf
     k = 0
-    slack = 1e-12 * prm[P_RADIUS] * dn
+    slack = SUPPORT_TIE * prm[P_RADIUS] * dn
     for q in range(-1, ng):
         g = top if q < 0 else q
         if q >= 0:

@@ -54,7 +54,7 @@ saves: each try is passes over the hull's vertices.
 import math
 
 from .constants import (EPA_DEGEN_TOL, EPA_FACE_EVALS, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
-                        GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL)
+                        GJK_FACE_TOL, GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL)
 from .geometry import borrow_args, meet, minkowski_core_xyz
 from .gjk_epa_workspace import (_FS_ROWS, _L3, _LAM, _LAMP, _PK, _PN, _PW, _T_D, _T_MIN_D,
                                 _T_MIN_W, _T_SHIFT, _T_VPREV, _T_W, _T_WA, _T_WB, _VOL, _VV, _W,
@@ -175,7 +175,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
         if gap <= GJK_REL_TOL * vv or gap <= GJK_ABS_TOL * scale * math.sqrt(vv):
             flag = _GJK_APART
             break
-        if polish and gap <= 0.1 * vv:
+        if polish and gap <= GJK_FACE_TOL * vv:
             inv = 1.0 / math.sqrt(vv)
             if face_left > 0:
                 # near a box's face normal or a cylinder's axis (within EPA_KINK_NEAR)

@@ -89,10 +89,11 @@ import math
 import numpy as np
 
 from .analytic import collide_analytic
-from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_FAIL_GAP, M_GJK_EPA,
-                        OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, OUT_SIZE,
-                        PLANE, PRE_APART, PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, ST_FAILED,
-                        ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, TOUCH_TOL)
+from .constants import (BOX, CAPSULE, CONVEX, CYLINDER, ELLIPSOID, EPA_FAIL_GAP, GJK_CAP_GAP,
+                        M_GJK_EPA, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB,
+                        OUT_SIZE, PLANE, PLANE_NORMAL_COS, PRE_APART, PRE_EXACT, PRE_UNDECIDED,
+                        PRE_UNPROVED, ST_FAILED, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED,
+                        ST_TOUCHING, TOUCH_TOL)
 from .epa import _epa, _grow_to_tetra
 from .geometry import (borrow_args, inflation, meet, minkowski_core_xyz, minkowski_full_xyz,
                        shape_scale)
@@ -316,7 +317,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
                 if cx * nrm[0] + cy * nrm[1] + cz * nrm[2] < 0.0:
                     cx, cy, cz = -cx, -cy, -cz
                 off = -(cx * W[0, 0] + cy * W[0, 1] + cz * W[0, 2])
-                if off > 0.0 and cx * nrm[0] + cy * nrm[1] + cz * nrm[2] > 0.99:
+                if off > 0.0 and cx * nrm[0] + cy * nrm[1] + cz * nrm[2] > PLANE_NORMAL_COS:
                     nrm[0], nrm[1], nrm[2] = cx, cy, cz
                     vn = off
         for c in range(3):
@@ -333,7 +334,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             wa[0], wa[1], wa[2] = ax_, ay_, az_
             wb[0], wb[1], wb[2] = bx_, by_, bz_
             w[0], w[1], w[2] = ax_ - bx_, ay_ - by_, az_ - bz_
-            if (vn * vn - _dot(v, w)) / vn > 1e-6 * scale:
+            if (vn * vn - _dot(v, w)) / vn > GJK_CAP_GAP * scale:
                 st = ST_FAILED
         if flag == _GJK_STALL:
             st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, True)

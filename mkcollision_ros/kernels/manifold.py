@@ -36,9 +36,10 @@ import math
 
 import numpy as np
 
-from .constants import (BOX, CAPSULE, CONE, CONVEX, CYLINDER, ELLIPSOID, FACE_SIN, FACE_SLACK,
-                        OUT_DIST, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, P_MARGIN, P_RADIUS,
-                        REF_COS, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING)
+from .constants import (BOX, CAPSULE, CONE, CONTACT_SAME_SQ, CONVEX, CYLINDER, ELLIPSOID, FACE_SIN,
+                        FACE_SLACK, OUT_DIST, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE,
+                        P_MARGIN, P_RADIUS, REF_COS, REF_TIE, ST_PENETRATING, ST_SEPARATED,
+                        ST_TOUCHING)
 from .geometry import inflation, quat_to_matrix_into
 from .jit import block_bounds, borrow, keep_alive, n_blocks, njit_kernel, njit_parallel, prange
 
@@ -329,7 +330,7 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
         al_a = _dot(fa_w, n) if na >= 3 else -2.0
         al_b = -_dot(fb_w, n) if nb >= 3 else -2.0
         if na >= 3 or nb >= 3:
-            ref_is_a = al_a >= al_b - 1e-3
+            ref_is_a = al_a >= al_b - REF_TIE
         else:
             ref_is_a = True
         if ref_is_a:
@@ -417,7 +418,7 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
             dd = 0.0
             for i in range(6):
                 dd += (cpts_k[c, i] - cpts_k[q, i]) ** 2
-            if dd <= 1e-24:
+            if dd <= CONTACT_SAME_SQ:
                 dup = True
                 break
         if not dup:

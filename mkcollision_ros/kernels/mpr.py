@@ -51,9 +51,9 @@ import math
 
 import numpy as np
 
-from .constants import (M_MPR, MPR_MAX_ITERS, MPR_REL_TOL, OUT_DIST, OUT_ITERS,
-                        OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, ST_FAILED,
-                        ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING,
+from .constants import (MPR_MAX_ITERS, MPR_NUDGE, MPR_PARALLEL_SIN, MPR_REL_TOL, M_MPR, OUT_DIST,
+                        OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA, OUT_PB, PLANE, ST_FAILED,
+                        ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, SUPPORT_TIE,
                         TOUCH_TOL)
 from .geometry import borrow_args, centre_core, minkowski_full_xyz, shape_scale
 from .jit import borrow, njit_inline, njit_kernel
@@ -242,9 +242,9 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         w[0, i] = ca[i] - cb
         wa[0, i] = ca[i]
         wb[0, i] = cb
-    if math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2) <= 1e-12 * scale:
+    if math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2) <= SUPPORT_TIE * scale:
         # centres coincide: the origin is interior; any ray direction will do
-        w[0, 0] = 1e-9 * scale
+        w[0, 0] = MPR_NUDGE * scale
         w[0, 1] = 0.0
         w[0, 2] = 0.0
 
@@ -259,7 +259,7 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
             dz = w[1, 0] * w[0, 1] - w[1, 1] * w[0, 0]
             n1 = math.sqrt(w[1, 0] ** 2 + w[1, 1] ** 2 + w[1, 2] ** 2)
             n0 = math.sqrt(w[0, 0] ** 2 + w[0, 1] ** 2 + w[0, 2] ** 2)
-            if math.sqrt(dx * dx + dy * dy + dz * dz) <= 1e-14 * n1 * n0:
+            if math.sqrt(dx * dx + dy * dy + dz * dz) <= MPR_PARALLEL_SIN * n1 * n0:
                 # origin on the segment v0-v1: the ray meets the boundary at v1, whose
                 # support plane has normal -v0 (exact supporting plane)
                 return _status(_write_support_plane(w, wa, out, 1.0), scale)

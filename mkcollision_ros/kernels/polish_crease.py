@@ -14,8 +14,8 @@ import math
 import numpy as np
 
 from .certificates import _ball_certified
-from .constants import (BOX, CYLINDER, EPA_KINK_ITERS, EPA_KINK_STEP, EPA_POLISH_CAP, EPA_REL_TOL,
-                        POLISH_STEP_DONE)
+from .constants import (BOX, CREASE_SLOPE_TOL, CYLINDER, EPA_KINK_ITERS, EPA_KINK_STEP,
+                        EPA_POLISH_CAP, EPA_REL_TOL, NO_DIRECTION, POLISH_STEP_DONE, SUPPORT_TIE)
 from .geometry import borrow_args, minkowski_core_xyz
 from .gjk_epa_workspace import _T_D, _store_min, borrow_gjk_workspace
 from .jit import njit_inline, njit_kernel
@@ -78,7 +78,7 @@ def _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, dx, dy, dz):
                 break
             step = -g / slope
             if abs(step) <= POLISH_STEP_DONE:
-                ok = abs(g) <= 1e-6 * scale
+                ok = abs(g) <= CREASE_SLOPE_TOL * scale
                 break
         step = max(-EPA_KINK_STEP, min(EPA_KINK_STEP, step))
         ta, ga = t, g
@@ -108,7 +108,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, ux, uy, uz, lim):
     nev = 0
     for m in range(6):
         if m < 2:
-            if not cn > 1e-12:
+            if not cn > NO_DIRECTION:
                 continue
             px, py, pz = cx / cn, cy / cn, cz / cn
         elif m < 4:
@@ -257,7 +257,7 @@ def _crease_slid(sa, sb, t_ab, scale, r, side, axis, kx, ky, kz):
     on both sides of the crease."""
     hlow, hu = r[2], r[3]
     pax, pay, paz, pbx, pby, pbz = r[7], r[8], r[9], r[10], r[11], r[12]
-    if not hu <= hlow + 1e-12 * scale:
+    if not hu <= hlow + SUPPORT_TIE * scale:
         return False, pax, pay, paz, pbx, pby, pbz
     s = -((pax - pbx) * kx + (pay - pby) * ky + (paz - pbz) * kz)
     if side == 0:
@@ -268,4 +268,4 @@ def _crease_slid(sa, sb, t_ab, scale, r, side, axis, kx, ky, kz):
         pbx, pby, pbz = pbx - s * kx, pby - s * ky, pbz - s * kz
         ax_ = (pbx - t_ab[0]) * kx + (pby - t_ab[1]) * ky + (pbz - t_ab[2]) * kz
         hh = sb[1][axis] if sb[0] == BOX else sb[1][1]
-    return abs(ax_) <= hh + 1e-12 * scale, pax, pay, paz, pbx, pby, pbz
+    return abs(ax_) <= hh + SUPPORT_TIE * scale, pax, pay, paz, pbx, pby, pbz

@@ -17,7 +17,8 @@ import math
 import numpy as np
 
 from .certificates import _face_basin
-from .constants import BOX, CYLINDER, EPA_KINK_NEAR, EPA_MAX_FACES
+from .constants import (AXES_SIN_MIN, BOX, CYLINDER, EPA_KINK_NEAR, EPA_MAX_FACES, FACE_MIN_EDGE,
+                        FACE_MIN_RADIUS, SUPPORT_TIE)
 from .geometry import borrow_args
 from .gjk_epa_workspace import (_IF, _NVMAX, _T_FACE_CAP, _VA, _VB, _store_min,
                                 borrow_gjk_workspace)
@@ -95,7 +96,7 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, dx, dy, dz):
         return 1, False
     ex, ey, ez = pts[i, 0] - pts[j, 0], pts[i, 1] - pts[j, 1], pts[i, 2] - pts[j, 2]
     le = math.sqrt(ex * ex + ey * ey + ez * ez)
-    if not (le > 1e-9 * scale and p1 - p2 < EPA_KINK_NEAR * le):
+    if not (le > FACE_MIN_EDGE * scale and p1 - p2 < EPA_KINK_NEAR * le):
         return k_f, True
     # the edge's direction (from j to i) in A's frame
     ex, ey, ez = ex / le, ey / le, ez / le
@@ -108,12 +109,12 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, dx, dy, dz):
     r = _crease_min(sa, sb, verts, r_ab, t_ab, scale, kx, ky, kz, dx, dy, dz)
     ok, nev, hlow, hu, ux, uy, uz, pax, pay, paz, pbx, pby, pbz = r
     nev += abs(k_f)
-    if not (ok and hu <= hlow + 1e-12 * scale):
+    if not (ok and hu <= hlow + SUPPORT_TIE * scale):
         return -nev, False
     # the edge still the support along u
     hx, hy, hz = _hull_dir(side, r_ab, ux, uy, uz)
     i2, j2, _, q1, _, q3 = _hull_top3(pts, hx, hy, hz)
-    if not (((i2 == i and j2 == j) or (i2 == j and j2 == i)) and q3 < q1 - 1e-12 * scale):
+    if not (((i2 == i and j2 == j) or (i2 == j and j2 == i)) and q3 < q1 - SUPPORT_TIE * scale):
         return -nev, False
     # slide the hull's point along the edge to cancel w's part along it; it must stay
     # on the edge (between j and i)
@@ -128,7 +129,7 @@ def _hull_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, dx, dy, dz):
                 - (r_ab[0, 0] * jx + r_ab[0, 1] * jy + r_ab[0, 2] * jz) * kx
                 - (r_ab[1, 0] * jx + r_ab[1, 1] * jy + r_ab[1, 2] * jz) * ky
                 - (r_ab[2, 0] * jx + r_ab[2, 1] * jy + r_ab[2, 2] * jz) * kz)
-    if not (-1e-12 * scale <= tpar <= le + 1e-12 * scale):
+    if not (-SUPPORT_TIE * scale <= tpar <= le + SUPPORT_TIE * scale):
         return -nev, False
     _store_min(fs, ux, uy, uz, pax - pbx, pay - pby, paz - pbz, pax, pay, paz, pbx, pby,
                pbz)
@@ -215,12 +216,12 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
             px, py, pz = P[i0, 0], P[i0, 1], P[i0, 2]
             bx, by, bz = P[i1, 0] - px, P[i1, 1] - py, P[i1, 2] - pz
             lb = 0.5 * math.sqrt(bx * bx + by * by + bz * bz)
-            if not lb > 1e-7 * scale:
+            if not lb > FACE_MIN_RADIUS * scale:
                 continue
             bx, by, bz = 0.5 * bx / lb, 0.5 * by / lb, 0.5 * bz / lb
         nx, ny, nz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
         sn = math.sqrt(nx * nx + ny * ny + nz * nz)
-        if not sn > 1e-6:
+        if not sn > AXES_SIN_MIN:
             continue
         nx, ny, nz = nx / sn, ny / sn, nz / sn
         c = nx * dx + ny * dy + nz * dz
@@ -255,7 +256,7 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
         s_ = (ga - cab * gb) / den
         t_ = (cab * ga - gb) / den
         rin = sn * min(la_ - abs(s_), lb_ - abs(t_))
-        if not (h > 0.0 and rin >= 1e-7 * scale):
+        if not (h > 0.0 and rin >= FACE_MIN_RADIUS * scale):
             return -1
         _store_min(fs, nx, ny, nz, h * nx, h * ny, h * nz, max_ + s_ * kax,
                    may_ + s_ * kay, maz_ + s_ * kaz, mbx + t_ * kbx, mby + t_ * kby,
@@ -291,7 +292,7 @@ def _cylinders_crossing(sa, sb, r_ab, t_ab, scale, fs):
     ra, la, rb, lb = sa[1][0], sa[1][1], sb[1][0], sb[1][1]
     bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
     rin = sn * min(la - abs(s), lb - abs(u))
-    if not (h > 0.0 and rin >= 1e-7 * scale):
+    if not (h > 0.0 and rin >= FACE_MIN_RADIUS * scale):
         return False
     _store_min(fs, nx, ny, 0.0, h * nx, h * ny, 0.0, ra * nx, ra * ny, s,
                t_ab[0] - rb * nx + u * bx, t_ab[1] - rb * ny + u * by, t_ab[2] + u * bz)
@@ -328,7 +329,7 @@ def _hull_edge_on_top(sa, sb, verts, r_ab, t_ab, scale, side, px, py, pz, nx, ny
     pts = verts[v0:v0 + vn]
     hx, hy, hz = _hull_dir(side, r_ab, nx, ny, nz)
     qx, qy, qz = _in_side_frame(side, r_ab, t_ab, px, py, pz)
-    return _none_above(pts, hx, hy, hz, hx * qx + hy * qy + hz * qz + 1e-12 * scale)
+    return _none_above(pts, hx, hy, hz, hx * qx + hy * qy + hz * qz + SUPPORT_TIE * scale)
 
 
 @njit_inline
@@ -415,7 +416,7 @@ def _face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, k, s):
         rin = face_room(prm, k, qx, qy, qz)
     else:
         rin = prm[0] - math.sqrt(qx * qx + qy * qy)
-    if not rin >= 1e-7 * scale:
+    if not rin >= FACE_MIN_RADIUS * scale:
         return -1
     _face_minimum(fs, side, nx, ny, nz, h, pax, pay, paz, pbx, pby, pbz)
     fs[_T_FACE_CAP, 0] = _face_basin(rin, h)
@@ -456,7 +457,7 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, i, j, m, hx, hy,
     if not c * c > 1.0 - EPA_KINK_NEAR * EPA_KINK_NEAR:
         return 0
     if not _none_above(pts, nx, ny, nz,
-                       nx * pts[i, 0] + ny * pts[i, 1] + nz * pts[i, 2] + 1e-12 * scale):
+                       nx * pts[i, 0] + ny * pts[i, 1] + nz * pts[i, 2] + SUPPORT_TIE * scale):
         return 0
     # the face's outward normal is its normal in A's frame on A, minus it on B
     if side == 0:
@@ -467,7 +468,7 @@ def _hull_face_test(sa, sb, verts, r_ab, t_ab, scale, ws, side, i, j, m, hx, hy,
         uz = -(r_ab[2, 0] * nx + r_ab[2, 1] * ny + r_ab[2, 2] * nz)
     h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz = _face_point(
         sa, sb, verts, r_ab, t_ab, side, ux, uy, uz)
-    eps = 1e-7 * scale
+    eps = FACE_MIN_RADIUS * scale
     for e in range(3):
         a_ = i if e == 0 else (j if e == 1 else m)
         b_ = j if e == 0 else (m if e == 1 else i)

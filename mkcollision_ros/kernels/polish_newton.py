@@ -20,7 +20,8 @@ import math
 
 import numpy as np
 
-from .constants import EPA_MAX_FACES, EPA_POLISH_ITERS, EPA_POLISH_STEP, POLISH_STEP_DONE
+from .constants import (EPA_MAX_FACES, EPA_POLISH_ITERS, EPA_POLISH_STEP, NEWTON_DET_MIN,
+                        POLISH_STEP_DONE, SUPPORT_TIE)
 from .geometry import borrow_args, minkowski_core_xyz
 from .gjk_epa_workspace import (_IF, _NVMAX, _PK, _PN, _PW, _T_D, _T_W, _T_WA, _V, _VD, _store_min,
                                 borrow_gjk_workspace)
@@ -95,7 +96,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
             c21 += wt * b2 * a1
             c22 += wt * b2 * a2
         det = m11 * m22 - m12 * m12
-        if not det > 1e-6 * (m11 + m22) ** 2:
+        if not det > NEWTON_DET_MIN * (m11 + m22) ** 2:
             return -k_it            # the samples span one tangent direction only
         i11, i12, i22 = m22 / det, -m12 / det, m11 / det
         h11 = c11 * i11 + c12 * i12 - h
@@ -127,7 +128,7 @@ def _newton_min_support(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
             sa, sb, verts, r_ab, t_ab, mx, my, mz)
         qx, qy, qz = pax - pbx, pay - pby, paz - pbz
         hn = mx * qx + my * qy + mz * qz
-        if not hn <= h + 1e-12 * scale:
+        if not hn <= h + SUPPORT_TIE * scale:
             return -(k_it + 1)
         nx, ny, nz, wx, wy, wz, h = mx, my, mz, qx, qy, qz, hn
         ax, ay, az = pax, pay, paz

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from .constants import GJK_FLAT_TOL
+from .constants import BARY_SLACK, GJK_FLAT_TOL, SLIVER_TOL
 from .jit import njit_inline, njit_kernel
 
 
@@ -63,7 +63,8 @@ def _tri_closest(a0, a1, a2, b0, b1, b2, c0, c1, c2):
                 l1 = (nx * (cy * az_ - cz * ay_) + ny * (cz * ax_ - cx * az_)
                       + nz * (cx * ay_ - cy * ax_)) / nn
                 l2 = 1.0 - l0 - l1
-            ok = nn > 0.0 and min(l0, min(l1, l2)) >= -1e-9 and max(l0, max(l1, l2)) <= 1.0 + 1e-9
+            ok = (nn > 0.0 and min(l0, min(l1, l2)) >= -BARY_SLACK
+                  and max(l0, max(l1, l2)) <= 1.0 + BARY_SLACK)
             if ok:
                 l0 = max(l0, 0.0)
                 l1 = max(l1, 0.0)
@@ -187,7 +188,7 @@ def _closest_simplex(W, WA, WB, n, lam, v, l3, vol):
             hm = math.sqrt((nx * nx + ny * ny + nz * nz)
                            * ((W[m, 0] - W[i, 0]) ** 2 + (W[m, 1] - W[i, 1]) ** 2
                               + (W[m, 2] - W[i, 2]) ** 2))
-            if s_o * s_m < 0.0 or not abs(s_m) > 1e-10 * hm:
+            if s_o * s_m < 0.0 or not abs(s_m) > SLIVER_TOL * hm:
                 inside = False
         if not inside:
             # the closest point lies on a face holding the new vertex W[3]: the face

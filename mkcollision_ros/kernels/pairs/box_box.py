@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..constants import ST_NOT_RUN
+from ..constants import NO_DIRECTION, SAT_EDGE_BIAS, ST_NOT_RUN
 from ..geometry import borrow_pose, inflation, meet, shape_scale
 from ..jit import borrow, njit_inline, njit_kernel
 from .core_distance import _finish_s, classify
@@ -93,7 +93,7 @@ def collide_box_box(sa, sb, r_ab, t_ab, out):
             else:
                 l0, l1, l2 = -c1, c0, 0.0
             ll = l0 * l0 + l1 * l1 + l2 * l2
-            if not ll > 1e-12:
+            if not ll > NO_DIRECTION:
                 continue     # parallel edges: covered by the face axes
             ln = math.sqrt(ll)
             ral = a[0] * abs(l0) + a[1] * abs(l1) + a[2] * abs(l2)
@@ -105,7 +105,7 @@ def collide_box_box(sa, sb, r_ab, t_ab, out):
             if ov < 0.0:
                 s = 1.0 / ln if tl >= 0.0 else -1.0 / ln
                 return _sat_apart(a, -ov, s * l0, s * l1, s * l2, ra, rb, out)
-            if ov < best and ov < face_best - 1e-9 * scale:
+            if ov < best and ov < face_best - SAT_EDGE_BIAS * scale:
                 best = ov
                 kind = 2
                 ki = i
@@ -218,7 +218,7 @@ def _box_feature_point(b, r_ab, t_ab, dx, dy, dz, fx, fy, fz):
     out0, out1, out2 = t_ab[0], t_ab[1], t_ab[2]
     for m in range(3):
         mm = r_ab[0, m] * dx + r_ab[1, m] * dy + r_ab[2, m] * dz
-        if abs(mm) > 1e-12:
+        if abs(mm) > NO_DIRECTION:
             bm = b[m] if mm > 0.0 else -b[m]
         else:
             fm = (r_ab[0, m] * (fx - t_ab[0]) + r_ab[1, m] * (fy - t_ab[1])
@@ -233,15 +233,15 @@ def _box_feature_point(b, r_ab, t_ab, dx, dy, dz, fx, fy, fz):
 @njit_kernel
 def _box_feature_point_a(a, dx, dy, dz, fx, fy, fz):
     """``_box_feature_point`` for A's own box (A's frame, no transform)."""
-    if abs(dx) > 1e-12:
+    if abs(dx) > NO_DIRECTION:
         x = a[0] if dx > 0.0 else -a[0]
     else:
         x = min(a[0], max(-a[0], fx))
-    if abs(dy) > 1e-12:
+    if abs(dy) > NO_DIRECTION:
         y = a[1] if dy > 0.0 else -a[1]
     else:
         y = min(a[1], max(-a[1], fy))
-    if abs(dz) > 1e-12:
+    if abs(dz) > NO_DIRECTION:
         z = a[2] if dz > 0.0 else -a[2]
     else:
         z = min(a[2], max(-a[2], fz))

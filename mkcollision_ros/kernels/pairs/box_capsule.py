@@ -6,6 +6,7 @@ docstring).  The result row: core_distance.py.
 """
 import math
 
+from ..constants import PARALLEL_SIN, SUPPORT_TIE
 from ..geometry import shape_scale
 from ..jit import njit_inline, njit_kernel
 from .core_distance import _finish_s
@@ -121,12 +122,12 @@ def collide_box_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
             s = min(hi, max(lo, lo - glo * (hi - lo) / (ghi - glo)))
     q0, q1, q2, d0, d1, d2 = _seg_box_offset(a0, a1, a2, c0, c1, c2, u0, u1, u2, s)
     core = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    if core > 1e-12 * scale:
+    if core > SUPPORT_TIE * scale:
         # lying flat (parallel to every face plane it is beyond): the distance is the
         # same along the part of the segment over the box; take its middle, so the
         # witness does not jump between the ends
         flat = 2.0 * h * max(abs(u0) if d0 != 0.0 else 0.0, abs(u1) if d1 != 0.0 else 0.0,
-                             abs(u2) if d2 != 0.0 else 0.0) <= 1e-12 * scale
+                             abs(u2) if d2 != 0.0 else 0.0) <= SUPPORT_TIE * scale
         if flat and h > 0.0:
             s = _seg_slab_middle(a0, a1, a2, c0, c1, c2, u0, u1, u2, h,
                                  d0 == 0.0, d1 == 0.0, d2 == 0.0)
@@ -152,7 +153,7 @@ def collide_box_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
         else:
             m0, m1, m2 = u1, -u0, 0.0
         ln = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
-        if ln < 1e-9:
+        if ln < PARALLEL_SIN:
             continue
         o = (a0 * abs(m0) + a1 * abs(m1) + a2 * abs(m2) - abs(m0 * c0 + m1 * c1 + m2 * c2)) / ln
         if o < best:
@@ -169,7 +170,7 @@ def collide_box_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
         else:
             n2 = sg
         # B's deepest point along -n: an end, or the middle of the part over the face
-        if 2.0 * h * abs(uk) > 1e-12 * scale:
+        if 2.0 * h * abs(uk) > SUPPORT_TIE * scale:
             s = -h if sg * uk > 0.0 else h
         else:
             s = _seg_slab_middle(a0, a1, a2, c0, c1, c2, u0, u1, u2, h,

@@ -86,7 +86,8 @@ axis-aligned scenes keep EPA's handling of face-to-face contacts.
 """
 import math
 
-from ..constants import BC_FEAT, BC_MAX_LEVEL, BOX, EPA_REL_TOL
+from ..constants import (BC_FEAT, BC_MAX_LEVEL, BC_ROOT_ITERS, BC_ROOT_STOP, BOX, DIV_FLOOR,
+                         EPA_REL_TOL, NO_DIRECTION, SUPPORT_TIE)
 from ..geometry import borrow_pose, meet
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import pre_outcome
@@ -109,7 +110,7 @@ def _rim_2d(A, r, j, k, n1, n2, d1, d2):
     mx = n1 * A[j, 0] + n2 * A[k, 0]
     my = n1 * A[j, 1] + n2 * A[k, 1]
     s = math.sqrt(mx * mx + my * my)
-    if not s > 1e-300:
+    if not s > DIV_FLOOR:
         mx = d1 * A[j, 0] + d2 * A[k, 0]
         my = d1 * A[j, 1] + d2 * A[k, 1]
         s = math.sqrt(mx * mx + my * my)
@@ -162,7 +163,7 @@ def _candidates(A, c, e, r, hc):
             s = -1.0 if ca > 0.0 else 1.0
             best, bt = v, 1
             bx, by, bz = s * ax, s * ay, s * az
-        if dn > 1e-12:
+        if dn > NO_DIRECTION:
             # type 2: m = +-(z x a_i) / |.|, horizontal
             mx, my = -ay / dn, ax / dn
             cm = c[0] * mx + c[1] * my
@@ -212,7 +213,7 @@ def _ellipse_floor(w1, w2, zj, zk, r, az):
     (monotone, no overshoot)."""
     zn = math.sqrt(zj * zj + zk * zk)
     e0, e1 = r, r * abs(az)
-    if not (zn > 0.0 and e1 > 1e-12 * r):
+    if not (zn > 0.0 and e1 > SUPPORT_TIE * r):
         return False, 0.0, 0.0, 0.0
     # ellipse frame: u = across (zk, -zj) / zn (semi-axis e0), v = along (semi-axis e1)
     ux, uy, vx, vy = zk / zn, -zj / zn, zj / zn, zk / zn
@@ -227,7 +228,7 @@ def _ellipse_floor(w1, w2, zj, zk, r, az):
             z0, z1 = y0 / e0, y1 / e1
             r0 = (e0 / e1) ** 2
             t = -1.0 + z1                   # F(t) >= 0 here
-            for _ in range(60):
+            for _ in range(BC_ROOT_ITERS):
                 a0, a1 = r0 * z0 / (t + r0), z1 / (t + 1.0)
                 g = a0 * a0 + a1 * a1 - 1.0
                 if not g > 0.0:
@@ -235,7 +236,7 @@ def _ellipse_floor(w1, w2, zj, zk, r, az):
                 dg = -2.0 * (a0 * a0 / (t + r0) + a1 * a1 / (t + 1.0))
                 step = -g / dg
                 t += step
-                if not step > 1e-16 * (1.0 + abs(t)):
+                if not step > BC_ROOT_STOP * (1.0 + abs(t)):
                     break
             x0, x1 = r0 * y0 / (t + r0), y1 / (t + 1.0)
         else:
@@ -266,7 +267,7 @@ def _circle_certified(A, c, e, r, hc, i, best, tol, stack, cand):
     j, k = (i + 1) % 3, (i + 2) % 3
     zj, zk = A[j, 2], A[k, 2]
     zn = math.sqrt(zj * zj + zk * zk)
-    if not zn > 1e-12:
+    if not zn > NO_DIRECTION:
         return True, best       # the circle is the crease: the candidates cover it
     cj = c[0] * A[j, 0] + c[1] * A[j, 1] + c[2] * A[j, 2]
     ck = c[0] * A[k, 0] + c[1] * A[k, 1] + c[2] * A[k, 2]

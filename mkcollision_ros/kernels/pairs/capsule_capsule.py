@@ -8,7 +8,7 @@ handled by clamping an endpoint projection.
 """
 import math
 
-from ..constants import OUT_PA, OUT_PB, P_MARGIN
+from ..constants import OUT_PA, OUT_PB, P_MARGIN, SEGMENT_MEET, SEGMENT_SIN2
 from ..geometry import quat_entries, shape_scale
 from ..jit import njit_inline, njit_kernel
 from .core_distance import _closest_on_segment_s, _finish_s, _point_point_s
@@ -44,7 +44,7 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
         b = d1x * d2x + d1y * d2y + d1z * d2z
         den = a * e - b * b
         # den = |d1|^2 |d2|^2 sin^2: treat as parallel below a relative threshold
-        if den > 1e-14 * a * e:
+        if den > SEGMENT_SIN2 * a * e:
             s = min(1.0, max(0.0, (b * f - c * e) / den))
         else:
             s = 0.0
@@ -57,7 +57,7 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
             s = min(1.0, max(0.0, (b - c) / a))
     c1x, c1y, c1z = p1x + s * d1x, p1y + s * d1y, p1z + s * d1z
     c2x, c2y, c2z = p2x + t * d2x, p2y + t * d2y, p2z + t * d2z
-    if a > 0.0 and e > 0.0 and den <= 1e-14 * a * e:
+    if a > 0.0 and e > 0.0 and den <= SEGMENT_SIN2 * a * e:
         # parallel: the pair above is valid but pick the middle of the overlap so the
         # witness does not jump between ends; re-project the overlap midpoint
         ua = ((p2x - p1x) * d1x + (p2y - p1y) * d1y + (p2z - p1z) * d1z) / a
@@ -71,7 +71,7 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
                                                   q2x, q2y, q2z)
     dx, dy, dz = c2x - c1x, c2y - c1y, c2z - c1z
     dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-    skew = den > 1e-14 * a * e and 0.0 < s < 1.0 and 0.0 < t < 1.0
+    skew = den > SEGMENT_SIN2 * a * e and 0.0 < s < 1.0 and 0.0 < t < 1.0
     if skew:
         # closest points inside both segments of skew axes: along the common
         # perpendicular d1 x d2, at the lines' offset along it.  c2 - c1 carries the
@@ -89,7 +89,7 @@ def _segments(p1x, p1y, p1z, d1x, d1y, d1z, p2x, p2y, p2z, q2x, q2y, q2z, tx, ty
             return _finish_s(c1x, c1y, c1z, off, nx, ny, nz, ra, rb, out)
     elif dn > tiny:
         return _point_point_s(c1x, c1y, c1z, c2x, c2y, c2z, ra, rb, out)
-    if den > 1e-14 * a * e:
+    if den > SEGMENT_SIN2 * a * e:
         # crossing axes: separate along the common perpendicular d1 x d2 (|d1 x d2|^2
         # = den, well away from zero here)
         nx = d1y * d2z - d1z * d2y
@@ -127,7 +127,7 @@ def collide_capsule_capsule(sa, sb, r_ab, t_ab, ra, rb, out):
     q2x, q2y, q2z = t_ab[0] - hb * r_ab[0, 2], t_ab[1] - hb * r_ab[1, 2], t_ab[2] - hb * r_ab[2, 2]
     return _segments(0.0, 0.0, ha, 0.0, 0.0, -2.0 * ha, p2x, p2y, p2z, q2x, q2y, q2z,
                      t_ab[0], t_ab[1], t_ab[2], 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, ra, rb,
-                     1e-15 * shape_scale(sa, sb), out)
+                     SEGMENT_MEET * shape_scale(sa, sb), out)
 
 
 @njit_inline
@@ -146,7 +146,7 @@ def capsule_capsule_world(prm_a, prm_b, pos_a, quat_a, pos_b, quat_b, scale, out
     dist = _segments(ha * r02, ha * r12, ha * r22, -2.0 * ha * r02, -2.0 * ha * r12,
                      -2.0 * ha * r22, p2x, p2y, p2z, q2x, q2y, q2z,
                      tx, ty, tz, r01, r11, r21, r00, r10, r20, prm_a[0] + prm_a[P_MARGIN],
-                     prm_b[0] + prm_b[P_MARGIN], 1e-15 * scale, out)
+                     prm_b[0] + prm_b[P_MARGIN], SEGMENT_MEET * scale, out)
     for c in range(3):
         out[OUT_PA + c] += pos_a[c]
         out[OUT_PB + c] += pos_a[c]

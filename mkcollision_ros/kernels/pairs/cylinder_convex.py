@@ -83,8 +83,8 @@ import math
 import numpy as np
 
 from ..constants import (CYLINDER, EPA_REL_TOL, FAN_MAX_POINTS, GJK_FLAT_TOL, HC_GJK_ITERS,
-                         HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL, PRE_APART, PRE_EXACT,
-                         PRE_UNDECIDED, PRE_UNPROVED)
+                         HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL, PARALLEL_SIN, PRE_APART,
+                         PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED)
 from ..geometry import borrow_args, cylinder_inradius
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import (_cap_normal, _cap_test, _certified_out, _cover, _frame,
@@ -482,7 +482,7 @@ def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, row
         sq = n2x * qx + n2y * qy + n2z * qz
         # the side: the equator meets the circle at +-w, w = z x e / |z x e|
         wl = math.sqrt(ex * ex + ey * ey)
-        if not wl > 1e-9:
+        if not wl > PARALLEL_SIN:
             return PRE_UNDECIDED
         wx, wy = -ey / wl, ex / wl
         ap, aq = wx * px + wy * py, wx * qx + wy * qy

@@ -57,7 +57,7 @@ other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
 """
 import math
 
-from ..constants import CC_CROSS_RINGS, CC_NEWTON_ITERS, CC_RIMS, EPA_REL_TOL
+from ..constants import AXES_SIN_MIN, CC_CROSS_RINGS, CC_NEWTON_ITERS, CC_RIMS, EPA_REL_TOL
 from ..geometry import borrow_args, cylinder_inradius, minkowski_core_xyz
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import (_apart_out, _cap_normal, _certified_out, _cover, _frame,
@@ -103,7 +103,7 @@ def sides_crossing(sa, sb, r_ab, t_ab):
     b|.  Axes parallel within 1e-6: no face, sn = 0 (and the rest 0)."""
     bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
     sn = math.sqrt(bx * bx + by * by)         # |a x b|, a = (0, 0, 1)
-    if not sn > 1e-6:
+    if not sn > AXES_SIN_MIN:
         return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     nx, ny = -by / sn, bx / sn
     nt = nx * t_ab[0] + ny * t_ab[1]

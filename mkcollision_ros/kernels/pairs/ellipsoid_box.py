@@ -62,8 +62,8 @@ import math
 
 import numpy as np
 
-from ..constants import (BE_EXACT, BE_POINT_ITERS, CC_NEWTON_ITERS, ELLIPSOID, EPA_REL_TOL, P_ROLL,
-                         PRE_APART, PRE_EXACT, PRE_UNDECIDED)
+from ..constants import (BE_EXACT, BE_POINT_ITERS, BE_ROOT_STOP, CC_NEWTON_ITERS, ELLIPSOID,
+                         EPA_REL_TOL, PRE_APART, PRE_EXACT, PRE_UNDECIDED, P_ROLL, ROLL_SHRINK)
 from ..geometry import borrow_pose, meet
 from ..jit import borrow, njit_inline, njit_kernel
 from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step
@@ -233,7 +233,7 @@ def _vertex_distance(c, S, roll, ell, axes, box, sx, sy, sz, scale):
         tn = t + f / df
         if not lo < tn < hi:
             tn = 0.5 * (lo + hi)
-        if abs(tn - t) <= 1e-15 * max(abs(t), min(a2, min(b2, c2))):
+        if abs(tn - t) <= BE_ROOT_STOP * max(abs(t), min(a2, min(b2, c2))):
             t = tn
             break
         t = tn
@@ -427,7 +427,7 @@ def _ellipsoid_box_bound(sa, sb, r_ab, t_ab, scale, stop, res):
     # than h, so that its centre stays under the face (a smaller ball touching at p lies
     # inside the larger one)
     cmin = min(ell[0], min(ell[1], ell[2]))
-    rho = min(h, max(0.0, (1.0 - 1e-12) * cmin * cmin / w - roll))
+    rho = min(h, max(0.0, (1.0 - ROLL_SHRINK) * cmin * cmin / w - roll))
     # the centre's distances to the other five faces: the opposite one and the sides
     fr = face_room(box, k, px, py, pz)
     room = min(2.0 * box[k] - (h - rho), fr)

@@ -72,7 +72,8 @@ import math
 import numpy as np
 
 from ..constants import (ELLIPSOID, FAN_MAX_POINTS, HE_BALL_ITERS, HE_BALL_TOL, HE_FAN_SLACK,
-                         HE_SUPPORT_TOL, PRE_APART, PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, P_ROLL)
+                         HE_POLE_SEP, HE_PROGRESS_RTOL, HE_SUPPORT_TOL, HE_WEIGHT_FLOOR, PRE_APART,
+                         PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, P_ROLL)
 from ..geometry import borrow_args
 from ..jit import borrow, njit_inline, njit_kernel
 from ..simplex import _closest_simplex
@@ -130,7 +131,7 @@ def _unit_ball_test(V, fl, nf, nvx, b0, b1, b2, need, W, v, l3, lam, vol):
             if gap > need:
                 return 2, gap, cx / cn, cy / cn, cz / cn
         # no progress: v is the nearest point (within rounding)
-        if vv - m <= 1e-12 * vv:
+        if vv - m <= HE_PROGRESS_RTOL * vv:
             return 0, 0.0, 0.0, 0.0, 0.0
         W[n, 0], W[n, 1], W[n, 2] = b0 * V[w, 0], b1 * V[w, 1], b2 * V[w, 2]
         n = _closest_simplex(W, W, W, n + 1, lam, v, l3, vol)
@@ -331,7 +332,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
     if lam[i0] > lam[i1]:
         i0, i1 = i1, i0
     l0, l1, l2 = lam[i0], lam[i1], lam[i2]
-    if not (l1 - l0 > 1e-9 * l2 and l2 - l1 > 1e-9 * l2):
+    if not (l1 - l0 > HE_POLE_SEP * l2 and l2 - l1 > HE_POLE_SEP * l2):
         return PRE_UNDECIDED
     lmid = l0 / math.sqrt(l2)
     kmid = l1 / (l1 - l0)
@@ -352,7 +353,7 @@ def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, ro
         P1, P2 = V[u, i1], V[u, i2]
         x0, x1, x2 = V[u, 0], V[u, 1], V[u, 2]
         w0, w1, w2 = l0 * P0 * P0, l1 * P1 * P1, l2 * P2 * P2
-        small = 1e-24 * l2 * scale * scale
+        small = HE_WEIGHT_FLOOR * l2 * scale * scale
         if not (w0 > small and w1 > small and w2 > small):
             return PRE_UNDECIDED
         k = 0

@@ -22,7 +22,8 @@ import math
 import numpy as np
 
 from ..constants import (CONVEX, FAN_MAX_POINTS, HE_DMIN_RTOL, HE_FOOT_SLACK, HE_ITERS,
-                         HE_ROOT_RTOL, P_FAN_EDGES, P_FAN_FACES, P_FAN_VERTS)
+                         HE_POLE_SEP, HE_ROOT_RTOL, HE_ROOT_SLACK, HE_WEIGHT_FLOOR, P_FAN_EDGES,
+                         P_FAN_FACES, P_FAN_VERTS)
 from ..jit import njit_inline, njit_kernel
 
 HE_MAX_FACES = 2 * FAN_MAX_POINTS - 4  # a polytope's faces, at most (Euler's formula)
@@ -129,15 +130,15 @@ def _roots_mid(l0, l1, l2, w0, w1, w2, out, k):
     # with the third term dropped phi is no larger, and that one's least value is
     # (w0^1/3 + w1^1/3)^3 / gap^2 - 1: no root if it is > 0 (first without the cube
     # roots: (.)^3 = w0 + w1 + 3 c0 c1 (c0 + c1) >= w0 + w1 + 6 sqrt(w0 w1))
-    if w0 + w1 + 6.0 * math.sqrt(w0 * w1) > gap * gap * (1.0 + 1e-9):
+    if w0 + w1 + 6.0 * math.sqrt(w0 * w1) > gap * gap * (1.0 + HE_ROOT_SLACK):
         return 0
     c0, c1 = np.cbrt(w0), np.cbrt(w1)
-    if (c0 + c1) ** 3 > gap * gap * (1.0 + 1e-9):
+    if (c0 + c1) ** 3 > gap * gap * (1.0 + HE_ROOT_SLACK):
         return 0
     # Newton's method on phi' (increasing) from the two-term minimiser, in the bracket,
     # until a point with phi <= 0 (then two roots) or a proof that phi > 0 (none)
-    lo = -l1 + 1e-9 * gap
-    hi = -l0 - 1e-9 * gap
+    lo = -l1 + HE_ROOT_SLACK * gap
+    hi = -l0 - HE_ROOT_SLACK * gap
     t = -l0 - gap * c0 / (c0 + c1)
     found = False
     for _ in range(HE_ITERS):
@@ -186,7 +187,7 @@ def _plane_feet(g11, g12, g22, wp, wq, U, scale, roots):
     tr_ = 0.5 * (g11 + g22)
     dd = math.sqrt(0.25 * (g11 - g22) ** 2 + g12 * g12)
     lam0, lam1 = tr_ - dd, tr_ + dd
-    if not lam1 - lam0 > 1e-9 * lam1:
+    if not lam1 - lam0 > HE_POLE_SEP * lam1:
         return -1, 0.0, 0.0, 0.0, 0.0, lam0, lam1
     # the ellipse's axes e0 = u (lam0), e1 = (-uy, ux)
     if abs(g11 - lam0) > abs(g22 - lam0):
@@ -198,7 +199,7 @@ def _plane_feet(g11, g12, g22, wp, wq, U, scale, roots):
     P0 = ux * wp + uy * wq
     P1 = -uy * wp + ux * wq
     w0, w1 = lam0 * P0 * P0, lam1 * P1 * P1
-    small = 1e-24 * lam1 * scale * scale
+    small = HE_WEIGHT_FLOOR * lam1 * scale * scale
     if not (w0 > small and w1 > small):
         return -1, ux, uy, P0, P1, lam0, lam1
     k = 0

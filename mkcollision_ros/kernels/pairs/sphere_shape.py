@@ -19,7 +19,8 @@ from A to B is minus B's outward surface normal at x.
 """
 import math
 
-from ..constants import BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, P_MARGIN, SPHERE
+from ..constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, P_MARGIN,
+                         SE_HALVINGS, SE_ROOT_STOP, SPHERE)
 from ..geometry import inflation, quat_rotate_xyz
 from ..jit import njit_inline, njit_kernel
 from .core_distance import _b_to_a, _finish_s, _origin_in_b
@@ -182,7 +183,7 @@ def _point_ellipsoid(e0, e1, e2, p0, p1, p2):
                 u = 0.0
             else:
                 lo = hi
-                for _ in range(1100):
+                for _ in range(SE_HALVINGS):
                     lo *= 0.5
                     f, df = _ellipsoid_newton_f(y0, y1, y2, e0, e1, e2, g0, g1, g2, lo)
                     if f >= 0.0 or not lo > 0.0:
@@ -200,7 +201,7 @@ def _point_ellipsoid(e0, e1, e2, p0, p1, p2):
             un = u - f / df if df < 0.0 else 0.5 * (lo + hi)
             if not (lo < un < hi):
                 un = 0.5 * (lo + hi)
-            if abs(un - u) <= 4e-16 * u or not lo < hi:
+            if abs(un - u) <= SE_ROOT_STOP * u or not lo < hi:
                 u = un
                 break
             u = un

@@ -15,7 +15,7 @@ JIT_EXTRA = {"os", "hashlib", "gc", "copy"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
 ROS_MODULES = {"node.py", "demo.py"}
-RERUN_MODULES = {"rerun_log.py", "render.py"}
+RERUN_MODULES = {"rerun_log.py", "rerun_recorder.py", "render.py"}
 
 
 def imports(path):

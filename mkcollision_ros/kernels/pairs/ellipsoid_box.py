@@ -63,10 +63,10 @@ import math
 import numpy as np
 
 from ..constants import (BE_EXACT, BE_POINT_ITERS, BE_ROOT_STOP, CC_NEWTON_ITERS, ELLIPSOID,
-                         EPA_REL_TOL, PRE_APART, PRE_EXACT, PRE_UNDECIDED, P_ROLL, ROLL_SHRINK)
+                         EPA_REL_TOL, PRE_EXACT, P_ROLL, ROLL_SHRINK)
 from ..geometry import borrow_pose, meet
 from ..jit import borrow, njit_inline, njit_kernel
-from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step
+from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step, pre_outcome
 
 
 @njit_inline
@@ -453,8 +453,5 @@ def collide_ellipsoid_box(sa, sb, r_ab, t_ab, scale, stop, res):
     (_ellipsoid_box_bound's first two outcomes), PRE_APART when a face plane proves the
     cores farther apart than ``stop`` (m; res the bound), else PRE_UNDECIDED."""
     d, exact = _ellipsoid_box_bound(sa, sb, r_ab, t_ab, scale, stop, res)
-    if exact:
-        return PRE_EXACT
-    if d < 0.0 and -d > stop:
-        return PRE_APART
-    return PRE_UNDECIDED
+    # an inexact d is never > 0 (a bound or nothing): pre_outcome's apart test decides it
+    return PRE_EXACT if exact else pre_outcome(d, stop)

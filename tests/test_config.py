@@ -64,7 +64,7 @@ def test_params_file_errors(tmp_path):
 
 
 def test_readme_parameter_table_is_the_nodes():
-    from mkcollision_ros.node import parameter_table
+    from mkcollision_ros.node_parameters import parameter_table
     readme = open(os.path.join(os.path.dirname(__file__), "..", "README.md"),
                   encoding="utf-8").read()
     assert parameter_table() in readme, "run: python tools/readme_parameters.py"

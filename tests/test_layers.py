@@ -14,7 +14,7 @@ KERNEL_OK = {"numpy", "numba", "math", "__future__"}
 JIT_EXTRA = {"os", "hashlib", "gc", "copy"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
-ROS_MODULES = {"node.py", "demo.py"}
+ROS_MODULES = {"node.py", "node_parameters.py", "demo.py"}
 RERUN_MODULES = {"rerun_log.py", "rerun_recorder.py", "render.py"}
 
 

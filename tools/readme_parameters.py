@@ -1,4 +1,4 @@
-"""Rewrite the node's parameter table in README.md from mkcollision_ros.node.PARAMETERS.
+"""Rewrite the node's parameter table in README.md from mkcollision_ros.node_parameters.PARAMETERS.
 
     . tools/env.sh && python tools/readme_parameters.py
 """
@@ -7,7 +7,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from mkcollision_ros.node import parameter_table  # noqa: E402
+from mkcollision_ros.node_parameters import parameter_table  # noqa: E402
 
 README = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "README.md")
 HEAD = "| parameter | type | default |"

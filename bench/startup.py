@@ -4,14 +4,15 @@ filled one, for the library and for the installed node.
 Rows (each a fresh process; "empty" is a new, empty ``XDG_CACHE_HOME``, so nothing this
 machine compiled before is seen):
   - library, every kernel (``python -m mkcollision_ros.compile_progress``, what
-    ``tools/setup.sh`` runs): empty cache, then the same cache again;
+    ``tools/setup.sh`` runs; two processes share a cold compile): empty cache, then
+    the same cache again; with ``--one-process`` also ``--jobs 1`` in an empty cache;
   - library, import to the first ``collide()`` result, cached;
   - node: from starting the installed ``collision_node`` (``config/collision_node.yaml``,
     the swarm's 11 bodies) to the first ``contacts`` message received here, poses
     published every 50 ms from the start: cached (after the library rows), and with
     ``--cold-node`` also in an empty cache (the node compiles at start).
 
-    . tools/env.sh && python bench/startup.py [--cold-node] [--skip-cold]
+    . tools/env.sh && python bench/startup.py [--cold-node] [--skip-cold] [--one-process]
 """
 import argparse
 import os
@@ -41,10 +42,11 @@ def _env(cache):
     return env
 
 
-def library_all(cache):
+def library_all(cache, jobs=2):
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "mkcollision_ros.compile_progress"], cwd=ROOT,
-                   env=_env(cache), check=True, stdout=subprocess.DEVNULL)
+    subprocess.run([sys.executable, "-m", "mkcollision_ros.compile_progress", "--jobs",
+                    str(jobs)], cwd=ROOT, env=_env(cache), check=True,
+                   stdout=subprocess.DEVNULL)
     return time.perf_counter() - t0
 
 
@@ -106,8 +108,14 @@ def main():
                     help="also time the node's start in an empty cache (compiles again)")
     ap.add_argument("--skip-cold", action="store_true",
                     help="leave out the library's empty-cache row")
+    ap.add_argument("--one-process", action="store_true",
+                    help="also the library's empty-cache compile in one process")
     args = ap.parse_args()
     rows = []
+    if args.one_process:
+        with tempfile.TemporaryDirectory() as cache:
+            rows.append(("library, every kernel, one process", "empty",
+                         library_all(cache, jobs=1)))
     with tempfile.TemporaryDirectory() as cache:
         if not args.skip_cold:
             rows.append(("library, every kernel", "empty", library_all(cache)))
@@ -117,8 +125,9 @@ def main():
     if args.cold_node:
         with tempfile.TemporaryDirectory() as cache:
             rows.append(("node, start to first contacts", "empty", node_first_answer(cache)))
-    print(f"`python bench/startup.py{' --cold-node' if args.cold_node else ''}`, "
-          f"{os.cpu_count()} cores\n")
+    flags = "".join(f" --{f}" for f in ("cold-node", "one-process")
+                    if getattr(args, f.replace("-", "_")))
+    print(f"`python bench/startup.py{flags}`, {os.cpu_count()} cores\n")
     print("| what | numba cache | s |")
     print("|---|---|---|")
     for what, cache, s in rows:

@@ -8,11 +8,34 @@ calls ``report(line)`` when an outermost compile starts, every HEARTBEAT_S while
 lasts (one kernel takes minutes), and when it ends: which kernel, how long it took, how
 many of the expected kernels are done and an estimate of the time left.  The estimate
 comes from EXPECTED_SECONDS, the outermost compiles of ``warm_up_all`` (the pipeline's
-warm-up, what the node compiles at start, then the pair API's) measured in an empty
-cache on the project's 2-core machine (``python -m mkcollision_ros.compile_progress
---measure`` measures them again); other kernels count as unknown.
+warm-up, what the node compiles at start, then the pair API's) in this process, with the
+compile shared by two (below), measured in an empty cache on the project's 2-core
+machine (``python -m mkcollision_ros.compile_progress --measure`` measures them again);
+other kernels count as unknown.
+
+Two processes: ``sharing(report)`` splits a cold compile between this process and a
+helper process (``python -m mkcollision_ros.compile_progress --helper DIR``), for the
+machine's second core.  numba compiles a kernel together with every compiled kernel it
+calls, and loads a called kernel from its on-disk cache when it is there; so the helper
+compiles SHARED_KERNELS, independent subtrees of the call graph, into the cache while
+this process compiles the rest and loads those from the cache.  SHARED_KERNELS lists
+them in the order this process's warm-up reaches them; the helper takes them from the
+end, so the two meet in the middle whatever each kernel costs on the machine.  Every
+compile of a shared kernel, in either process, first claims it (a file created with
+O_EXCL in DIR): the claimant compiles it and then marks it done; the other process,
+needing it, waits for the mark and loads it from the cache, or skips it (the helper).
+The call graph has no cycles, so two processes never wait for each other.  The helper
+compiles a kernel by its signature, written in kernels' terms in ``compile_plan.py``
+(``--write-plan`` rewrites it from the cache; ``tests/test_compile_progress.py`` checks
+it against the kernels' callers).  A signature asked for that the plan does not hold
+compiles here, unshared, and is reported.
 """
 import contextlib
+import importlib
+import os
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 
@@ -21,17 +44,13 @@ from numba.core import event
 # outermost compiles of a cold warm-up: kernel name -> seconds (see the module docstring)
 EXPECTED_SECONDS = {
     "normalise_poses": 0,
-    "world_aabbs": 2,
-    "find_pairs": 16,
+    "world_aabbs": 3,
+    "find_pairs": 11,
     "filter_pairs": 1,
-    "_collide_block": 281,
-    "split_pairs": 0,
-    "_manifold_block": 8,
-    "arbiter_step": 6,
-    "_fan_build": 2,
-    "_collide_batch": 23,
-    "_manifold_batch": 3,
-    "collide_world": 13,
+    "_collide_block": 164,
+    "_collide_batch": 31,
+    "_manifold_batch": 5,
+    "collide_world": 14,
 }
 # s between two "still compiling" lines during one long compile
 HEARTBEAT_S = 15.0
@@ -109,13 +128,219 @@ def reporting(report, expected=None, heartbeat=HEARTBEAT_S):
         event.unregister("numba:compile", listener)
 
 
-def warm_up_all(report=print):
+# compiled kernels ("module:name") whose subtrees the helper process may compile, in
+# the order Pipeline.warm_up reaches them (module docstring, "Two processes")
+SHARED_KERNELS = (
+    "mkcollision_ros.kernels.pairs.box_cylinder:_box_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.cylinder_cylinder:_cylinder_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.capsule_cylinder:_capsule_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.ellipsoid_cylinder:_ellipsoid_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.cylinder_convex:collide_cylinder_convex",
+    "mkcollision_ros.kernels.pairs.cylinder_convex:_cylinder_convex_ball_bound",
+    "mkcollision_ros.kernels.pairs.ellipsoid_box:_ellipsoid_box_bound",
+    "mkcollision_ros.kernels.pairs.ellipsoid_convex:collide_ellipsoid_convex",
+    "mkcollision_ros.kernels.mpr:mpr_ws",
+    "mkcollision_ros.kernels.gjk_epa:_caps_fallback",
+    "mkcollision_ros.kernels.epa:_epa",
+    "mkcollision_ros.kernels.gjk:_witness_by_gjk",
+    "mkcollision_ros.kernels.analytic:collide_analytic",
+    "mkcollision_ros.kernels.ellipsoid:ellipsoid_exact",
+    "mkcollision_ros.kernels.ellipsoid:ellipsoid_sampled",
+    "mkcollision_ros.kernels.manifold:split_pairs",
+    "mkcollision_ros.kernels.manifold:_manifold_block",
+    "mkcollision_ros.kernels.persistence:arbiter_step",
+    "mkcollision_ros.hull:_fan_build",
+)
+# s between two looks for a mark of the other process
+POLL_S = 0.1
+
+
+def dispatcher(key):
+    """The numba dispatcher named by ``key`` ("module:name")."""
+    module, name = key.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def _type_names():
+    from numba.core import types
+    return dict(vars(types), bool=types.boolean)     # an array's repr names bool "bool"
+
+
+def planned_signatures():
+    """key -> the planned signature (a tuple of numba types) of each shared kernel, from
+    compile_plan.py."""
+    from . import compile_plan
+    names = _type_names()
+    return {key: eval(text, names) for key, text in compile_plan.SIGNATURES.items()}
+
+
+def cached_signatures(key):
+    """The signatures the on-disk cache holds for the kernel ``key``."""
+    index = dispatcher(key)._cache._cache_file._load_index()
+    return [k[0] for k in index]
+
+
+class _Claims:
+    """The claim and done marks of one shared compile in ``folder``, for the dispatchers
+    of ``plan`` (key -> signature); the other process is alive while
+    ``other_alive()``."""
+
+    def __init__(self, folder, plan, other_alive, report):
+        self.folder = folder
+        self.plan = plan
+        self.other_alive = other_alive
+        self.report = report
+        self.plain = {}
+
+    def _path(self, key, what):
+        return os.path.join(self.folder, f"{key.replace(':', '.')}.{what}")
+
+    def claim(self, key):
+        try:
+            os.close(os.open(self._path(key, "claim"), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+            return True
+        except FileExistsError:
+            return False
+
+    def done(self, key):
+        return os.path.exists(self._path(key, "done"))
+
+    def mark_done(self, key):
+        with open(self._path(key, "done"), "w"):
+            pass
+
+    def wait_done(self, key):
+        while not self.done(key) and self.other_alive():
+            time.sleep(POLL_S)
+
+    def install(self):
+        """Route each planned kernel's compile through its claim (until ``remove``)."""
+        for key in self.plan:
+            disp = dispatcher(key)
+            self.plain[key] = disp.compile
+            disp.compile = self._gated(key, disp.compile)
+
+    def remove(self):
+        for key in self.plain:
+            dispatcher(key).__dict__.pop("compile", None)
+        self.plain = {}
+
+    def _gated(self, key, plain):
+        def compile(sig):
+            if tuple(getattr(sig, "args", sig)) != self.plan[key]:
+                self.report(f"{key} asked for a signature compile_plan.py does not hold: "
+                            "compiled here (python -m mkcollision_ros.compile_progress "
+                            "--write-plan)")
+                return plain(sig)
+            if self.claim(key):
+                try:
+                    return plain(sig)
+                finally:
+                    self.mark_done(key)
+            self.wait_done(key)
+            return plain(sig)         # from the cache, which the other process filled
+        return compile
+
+
+_PLAN_FILE = "plan.txt"          # the helper's kernels, one "key<TAB>signature" a line
+
+
+def _cached(plan):
+    try:
+        return all(sig in cached_signatures(key) for key, sig in plan.items())
+    except (OSError, EOFError, AttributeError):
+        return False
+
+
+@contextlib.contextmanager
+def sharing(report=print, jobs=2, plan=None):
+    """Inside the block, numba's compiles of the kernels of ``plan`` (key -> signature,
+    in the order the block reaches them; default: SHARED_KERNELS and compile_plan.py)
+    are split with a helper process (module docstring, "Two processes") when ``jobs`` >
+    1 and the cache lacks any of them; the helper's lines go to ``report``.  Leaves
+    the helper finished."""
+    if plan is None:
+        full = planned_signatures()
+        plan = {key: full[key] for key in SHARED_KERNELS}
+    if jobs < 2 or _cached(plan):
+        yield
+        return
+    with tempfile.TemporaryDirectory(prefix="mkcollision-compile-") as folder:
+        with open(os.path.join(folder, _PLAN_FILE), "w") as f:
+            f.writelines(f"{key}\t{sig!r}\n" for key, sig in plan.items())
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+            p for p in (_PACKAGE_PARENT, os.environ.get("PYTHONPATH")) if p))
+        helper = subprocess.Popen(
+            [sys.executable, "-m", "mkcollision_ros.compile_progress", "--helper", folder],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+
+        def relay():
+            for line in helper.stdout:
+                report(f"(second process) {line.rstrip()}")
+        relaying = threading.Thread(target=relay, daemon=True)
+        relaying.start()
+        claims = _Claims(folder, plan, lambda: helper.poll() is None, report)
+        claims.install()
+        try:
+            yield
+        finally:
+            claims.remove()
+            if helper.poll() is None:
+                helper.terminate()
+            helper.wait()
+            relaying.join(timeout=5.0)
+
+
+_PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _read_plan(folder):
+    names = _type_names()
+    plan = {}
+    with open(os.path.join(folder, _PLAN_FILE)) as f:
+        for line in f:
+            key, text = line.rstrip("\n").split("\t")
+            plan[key] = eval(text, names)
+    return plan
+
+
+def _helper(folder):
+    """The helper process: compile the kernels of ``folder``'s plan from its end, each
+    one nobody has claimed, until the parent process is gone or all are done."""
+    parent = os.getppid()
+
+    def say(line):
+        print(line, flush=True)
+
+    claims = _Claims(folder, _read_plan(folder), lambda: os.getppid() == parent, say)
+    claims.install()
+    for key in reversed(list(claims.plan)):
+        if os.getppid() != parent:
+            break
+        if claims.done(key) or not claims.claim(key):
+            continue
+        t0 = time.perf_counter()
+        disp = dispatcher(key)
+        hits = sum(disp.stats.cache_hits.values())
+        try:
+            claims.plain[key](claims.plan[key])
+        finally:
+            claims.mark_done(key)
+        name = key.split(":")[1]
+        if sum(disp.stats.cache_hits.values()) > hits:
+            say(f"loaded {name} from the cache")
+        else:
+            say(f"compiled {name} in {time.perf_counter() - t0:.0f} s")
+
+
+def warm_up_all(report=print, jobs=2):
     """Compile (or load from the cache) every kernel any entry point reaches: the
     pipeline's (``Pipeline.warm_up``: what the node compiles at start) and the pair
     API's (``mkcollision_ros.warm_up``: ``collide``, ``distance``, each method),
-    reporting progress to ``report``.  Returns the seconds it took."""
+    reporting progress to ``report``; ``jobs`` 2 shares a cold compile with a second
+    process (``sharing``).  Returns the seconds it took."""
     t0 = time.perf_counter()
-    with reporting(report):
+    with reporting(report), sharing(report, jobs):
         _compile_everything()
     return time.perf_counter() - t0
 
@@ -127,10 +352,10 @@ def _compile_everything():
     warm_up()
 
 
-def _measure():
+def _measure(jobs):
     """Compile what the warm-ups reach and print the outermost kernels' seconds as
-    EXPECTED_SECONDS (run it with an empty cache: NUMBA_CACHE_DIR=$(mktemp -d))."""
-    with reporting(print, {}, heartbeat=0) as listener:
+    EXPECTED_SECONDS (run it with an empty cache: XDG_CACHE_HOME=$(mktemp -d))."""
+    with reporting(print, {}, heartbeat=0) as listener, sharing(print, jobs):
         _compile_everything()
     print("EXPECTED_SECONDS = {")
     for name, s in listener.seconds.items():
@@ -138,24 +363,56 @@ def _measure():
     print("}")
 
 
+def write_plan():
+    """compile_plan.py's text: each shared kernel's signature in the cache (after the
+    warm-ups, which fill it); ValueError unless each has exactly one."""
+    _compile_everything()
+    lines = []
+    for key in SHARED_KERNELS:
+        sigs = cached_signatures(key)
+        if len(sigs) != 1:
+            raise ValueError(f"{key}: {len(sigs)} signatures in the cache, want 1 "
+                             "(run this with a fresh cache)")
+        lines.append(f"    {key!r}:\n        {repr(sigs[0])!r},")
+    return ('"""The signatures of compile_progress.SHARED_KERNELS, which the second process '
+            'of a\ncold compile compiles by name (written by ``python -m '
+            'mkcollision_ros.compile_progress\n--write-plan``; numba type reprs)."""\n'
+            "SIGNATURES = {\n" + "\n".join(lines) + "\n}\n")
+
+
 def main(argv=None):
     """``python -m mkcollision_ros.compile_progress``: compile every kernel into the
     cache, with progress lines (what ``tools/setup.sh`` runs; about a second once
-    cached).  ``--measure``: print EXPECTED_SECONDS instead."""
+    cached), in two processes unless ``--jobs 1``.  ``--measure``: print
+    EXPECTED_SECONDS instead; ``--write-plan``: rewrite compile_plan.py."""
     import argparse
     parser = argparse.ArgumentParser(prog="python -m mkcollision_ros.compile_progress",
                                      description=main.__doc__)
+    parser.add_argument("--jobs", type=int, default=2, choices=(1, 2),
+                        help="processes of a cold compile (default 2)")
     parser.add_argument("--measure", action="store_true",
                         help="print the outermost compiles' seconds as EXPECTED_SECONDS")
+    parser.add_argument("--write-plan", action="store_true",
+                        help="rewrite compile_plan.py from the cache")
+    parser.add_argument("--helper", metavar="DIR", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.helper:
+        _helper(args.helper)
+        return 0
     if args.measure:
-        _measure()
+        _measure(args.jobs)
+        return 0
+    if args.write_plan:
+        text = write_plan()
+        with open(os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                               "compile_plan.py"), "w") as f:
+            f.write(text)
         return 0
 
     def say(line):
         print(f"[kernels] {line}", flush=True)
 
-    took = warm_up_all(say)
+    took = warm_up_all(say, args.jobs)
     say(f"every kernel ready in {took:.1f} s")
     return 0
 

@@ -153,7 +153,9 @@ class CollisionNode(Node):
             message="warming up: compiling or loading the kernels",
             hardware_id=self.get_fully_qualified_name()))
         t0 = time.perf_counter()
-        with compile_progress.reporting(self.get_logger().info):
+        # a cold compile is shared with a second process (compile_progress.sharing)
+        log = self.get_logger().info
+        with compile_progress.reporting(log), compile_progress.sharing(log):
             self.pipeline.warm_up()
         self.warm_up_s = time.perf_counter() - t0
         self.get_logger().info(

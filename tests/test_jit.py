@@ -154,3 +154,40 @@ def test_the_one_memo_inliner_emits_the_same_llvm_ir(tmp_path):
     assert with_memo.split("\n", 1)[0].split()[1] == without.split("\n", 1)[0].split()[1]
     assert len(with_memo) > 2000 and "define" in with_memo
     assert with_memo.split("\n", 1)[1] == without.split("\n", 1)[1]
+
+
+def _compiled_kernel_calls_with_constants():
+    """(file, line, kernel, argument) for every call of a compiled, not inlined kernel
+    (njit_kernel, njit_parallel) inside kernels/ whose argument is an integer or boolean
+    constant: numba types such an argument as a literal and compiles the callee once
+    per value (jit.py, "Literal")."""
+    import ast
+    import pathlib
+    root = pathlib.Path(jit.__file__).parent
+    trees = {p: ast.parse(p.read_text()) for p in sorted(root.rglob("*.py"))}
+    compiled = {n.name for t in trees.values() for n in ast.walk(t)
+                if isinstance(n, ast.FunctionDef) and n.decorator_list
+                and ast.unparse(n.decorator_list[0]) in ("njit_kernel", "njit_parallel")}
+    found = []
+    for path, tree in trees.items():
+        # calls from compiled code only (a call from Python passes a plain int64)
+        jitted = [f for f in ast.walk(tree) if isinstance(f, ast.FunctionDef)
+                  and f.decorator_list
+                  and ast.unparse(f.decorator_list[0]).startswith("njit_")]
+        for n in (c for f in jitted for c in ast.walk(f)):
+            if not isinstance(n, ast.Call):
+                continue
+            name = getattr(n.func, "id", None) or getattr(n.func, "attr", None)
+            if name not in compiled:
+                continue
+            for a in n.args + [k.value for k in n.keywords]:
+                v = a.operand if isinstance(a, ast.UnaryOp) else a
+                if isinstance(v, ast.Constant) and isinstance(v.value, (bool, int)):
+                    found.append((path.relative_to(root).as_posix(), n.lineno, name,
+                                  ast.unparse(a)))
+    return found
+
+
+def test_no_compiled_kernel_is_called_with_a_literal_constant():
+    assert _compiled_kernel_calls_with_constants() == [], \
+        "write the constant as np.int64(c) or np.bool_(c) (kernels/jit.py, 'Literal')"

@@ -94,7 +94,8 @@ fi
 
 # numba's compile of every kernel into its on-disk cache, shared by the tests, the demo,
 # `ros2 run` and other clones of the same sources (kernels/jit.py); minutes the first
-# time, with a line per kernel, about a second once cached.  MKCOLLISION_SKIP_COMPILE=1
+# time, split between two processes (compile_progress.sharing), with a line per kernel;
+# about a second once cached.  MKCOLLISION_SKIP_COMPILE=1
 # leaves it to the first use.
 if [ "${MKCOLLISION_SKIP_COMPILE:-0}" = "1" ]; then
   log "kernel compile skipped (MKCOLLISION_SKIP_COMPILE=1)"

@@ -445,7 +445,7 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     slots = np.empty((m, GRID_ROW_SLOTS), np.int64)
     dummy = np.empty(0, np.int64)
     _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
-              e_body, e_key, e_cmin, e_box, n, counts, False, dummy, offsets, slots)
+              e_body, e_key, e_cmin, e_box, n, counts, np.bool_(False), dummy, offsets, slots)
     n_over = 0
     for r in range(m):
         offsets[r + 1] = offsets[r] + counts[r]
@@ -459,7 +459,7 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
                 body_keys[offsets[r] + c] = slots[r, c]
     if n_over > 0:
         _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift,
-                  bucket_start, e_body, e_key, e_cmin, e_box, n, counts, True, body_keys,
+                  bucket_start, e_body, e_key, e_cmin, e_box, n, counts, np.bool_(True), body_keys,
                   offsets, slots)
     # --- planes against every body reaching their half-space
     hit = np.zeros((n_planes, m), np.bool_)

@@ -319,8 +319,8 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
             VB[i, c] = WB[i, c]
             VD[i, c] = 0.0
             cin[c] += 0.25 * W[i, c]
-    nv = 4
-    nf = 4
+    nv = np.int64(4)   # typed int64 at once (jit.py, "Literal")
+    nf = np.int64(4)
     F[0, 0], F[0, 1], F[0, 2] = 0, 1, 2
     F[1, 0], F[1, 1], F[1, 2] = 0, 3, 1
     F[2, 0], F[2, 1], F[2, 2] = 0, 2, 3

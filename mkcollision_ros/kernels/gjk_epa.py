@@ -259,8 +259,9 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         elif other == CONVEX:
             if cylinder_hull_pair(sa, sb):
                 # the hull's fan stored (cylinder_convex): as the ellipsoid's below
-                pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
-                                              fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+                pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale,
+                                              np.bool_(False), stop, fs[_V:_V + HE_ROWS],
+                                              fv[_FD:_FD + 8], res)
             if pre == PRE_UNDECIDED:
                 pre = collide_cylinder_convex_ball(sa, sb, verts, r_ab, t_ab, scale, stop, res)
     elif not iterate and _ellipsoid_box(sa[0], sb[0]):
@@ -273,7 +274,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
         # depth when a cheap test proves the pair overlapping; without that proof
         # (PRE_UNPROVED), again after GJK once it finds the cores overlapping (below, in
         # place of EPA); or a hull face's plane proving the cores apart
-        pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, False, stop,
+        pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, np.bool_(False), stop,
                                        fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
     if pre == PRE_EXACT or pre == PRE_APART:
         return _core_out(out, res, ra, rb, pa, pb, np.int64(1), scale)
@@ -337,16 +338,16 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             if (vn * vn - _dot(v, w)) / vn > GJK_CAP_GAP * scale:
                 st = ST_FAILED
         if flag == _GJK_STALL:
-            st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, True)
+            st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, np.bool_(True))
         return st
     if pre == PRE_UNPROVED:
         # GJK found the cores overlapping: the fan's exact depth in place of EPA
         if sa[0] == CYLINDER or sb[0] == CYLINDER:
-            pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, True, stop,
-                                          fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+            pre = collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, np.bool_(True),
+                                          stop, fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
         else:
-            pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, True, stop,
-                                           fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
+            pre = collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, np.bool_(True),
+                                           stop, fs[_V:_V + HE_ROWS], fv[_FD:_FD + 8], res)
         if pre == PRE_EXACT:
             return _core_out(out, res, ra, rb, pa, pb, np.int64(iters + 1), scale)
     # phase 2: EPA on the cores.  The full Minkowski difference is the core one grown
@@ -392,7 +393,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
             and not res[0] - gap + ra + rb > TOUCH_TOL * scale):
         st = ST_FAILED
     if not conv:
-        st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, False)
+        st = _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, np.bool_(False))
     return st
 
 

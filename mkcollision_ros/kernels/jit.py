@@ -53,12 +53,13 @@ cheap, both active only while numba compiles and neither changing what is compil
   in about two thirds of the time.  It is applied to numba 0.68.1 only, the pinned version
   whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
 
-"Literal": an integer constant passed to a compiled (not inlined) kernel is typed
-``Literal[int](c)``, and so is a loop variable before numba's type propagation has
-seen its later values (``k = 0`` ahead of ``k = axis`` in a loop).  numba then compiles
-the callee once for the literal and once more for int64, identical code, one wasted
-compile each.  Such a constant or first value is written ``np.int64(c)``, typed int64
-at once.  ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
+"Literal": an integer or boolean constant passed to a compiled (not inlined) kernel is
+typed ``Literal[int](c)`` or ``Literal[bool](c)``, and so is a loop variable before
+numba's type propagation has seen its later values (``k = 0`` ahead of ``k = axis`` in a
+loop).  numba then compiles the callee once per literal value (and once more for the
+plain type where a variable is passed), identical code, one more compile each.  Such a constant or first value is written
+``np.int64(c)`` or ``np.bool_(c)``, typed int64 or bool at once
+(``tests/test_jit.py`` finds constant arguments at the call sites).  ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
 them: a cached kernel never compiles the kernels it calls).
 """
 import copy

@@ -82,7 +82,7 @@ def _feature(code, prm, verts, v0, vn, d, poly, fn):
     (ordered around its centre).
     """
     dx, dy, dz = d[0], d[1], d[2]
-    count = 0
+    count = np.int64(0)   # typed int64 at once (jit.py, "Literal")
     if code == BOX:
         ax0, ax1, ax2 = abs(dx), abs(dy), abs(dz)
         k = 0

@@ -260,7 +260,7 @@ def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
         if method == M_ELLIPSOID_EXACT:
             st = ellipsoid_exact(sa, sb, r_ab, t_ab, out)
         else:
-            st = ellipsoid_sampled(sa, sb, r_ab, t_ab, ELLIPSOID_SAMPLED_SUBDIV, out)
+            st = ellipsoid_sampled(sa, sb, r_ab, t_ab, np.int64(ELLIPSOID_SAMPLED_SUBDIV), out)
         if st == ST_NOT_RUN:
             return st
         iters = out[OUT_ITERS]

@@ -303,7 +303,7 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
                 used_old[bj] = True
             # 3. the merged set: this step's contacts, then the unmatched stored ones that did
             #    not drift (points apart along the normal, or across it, by > drift_threshold)
-            m = 0
+            m = np.int64(0)   # typed int64 at once (jit.py, "Literal")
             for i in range(m_new):
                 for q in range(3):
                     pa[m, q] = cpts[row, i, q]

@@ -710,16 +710,26 @@ def main(args=None):
     node = None
     code = 0
     try:
-        node = CollisionNode()
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except ValueError as err:  # ConfigError and invalid bodies: one clear line, exit 1
-        log.fatal(f"invalid configuration: {err}")
-        code = 1
-    except Exception as err:  # noqa: BLE001 - rclpy's own parameter errors at start
-        log.fatal(f"invalid configuration: {type(err).__name__}: {err}")
-        code = 1
+        try:
+            node = CollisionNode()
+        except ValueError as err:  # ConfigError and invalid bodies: one clear line, exit 1
+            log.fatal(f"invalid configuration: {err}")
+            return 1
+        except (KeyboardInterrupt, ExternalShutdownException):
+            return 0
+        except Exception as err:  # noqa: BLE001 - rclpy's own parameter errors at start
+            log.fatal(f"invalid configuration: {type(err).__name__}: {err}")
+            return 1
+        try:
+            rclpy.spin(node)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        except Exception as err:  # noqa: BLE001
+            # a Ctrl-C that lands inside a callback invalidates the context under a
+            # publish (RCLError): that is the shutdown, not a failure
+            if rclpy.ok():
+                log.fatal(f"stopped by an error: {type(err).__name__}: {err}")
+                code = 1
     finally:
         if node is not None:
             node.destroy_node()

@@ -11,8 +11,11 @@ step it receives the pair's new contacts (world frame, from the manifold) and:
   2. matches every new contact to the closest stored one (greedy by distance, closest
      first, deterministic ties): within ``merge_distance`` (m, distance between the new
      and stored points on either body) it updates it and keeps its ``contact_id``;
-     otherwise it is added (``began``) and, if it survives step 4, gets a new id from a
-     monotonic counter (ids are never reused).  Matching comes before the drift rule
+     otherwise it is added (``began``) and, if it survives step 4, gets a new id: a
+     63-bit mix of the two bodies' name hashes (``body_hashes``), the step's stamp
+     (``stamp_key``) and its number among the pair's new contacts of the step, never
+     one the pair holds (kernels/persistence.py); so any process that runs the pair on
+     the same poses and stamps gives it the same ids, whatever else it runs (shards).  Matching comes before the drift rule
      (as Bullet's getCacheEntry comes before refreshContactPoints): a body sliding or
      spinning faster than ``drift_threshold`` per step moves the stored point on the
      other body away, but the new point is still where the stored one is on its own
@@ -23,7 +26,7 @@ step it receives the pair's new contacts (world frame, from the manifold) and:
   4. reduces to ``max_contacts``: the deepest, then the farthest from it, then the
      point spanning the largest triangle, then the largest quadrilateral, and so on by
      greedy area (Bullet's ``sortCachedPoints``, Jolt's ``PruneContactPoints``);
-     ties go to the older contact (smaller id) so the manifold stays stable.
+     ties go to the older contact so the manifold stays stable.
 
 The arbiter of a pair is created when the pair starts touching (``began`` pair event)
 and removed when it separates (``ended``) or was not confirmed (narrow phase failed or
@@ -42,6 +45,8 @@ pairs (a sorted-key merge), matching, drift, reduction, ids, events and the comp
 new state - is one serial numba kernel (``kernels.persistence.arbiter_step``), so a step
 costs microseconds for a few pairs and ~1 us per touching pair, with no Python loop.
 """
+import hashlib
+
 import numpy as np
 
 from .kernels.constants import ST_NOT_RUN
@@ -49,6 +54,19 @@ from .kernels.manifold import MAX_MANIFOLD
 from .kernels.persistence import EV_BEGAN, EV_ENDED, EV_PERSISTED, arbiter_step
 from .rotations import quat_to_matrix
 from .scene import KEY_BASE
+
+def body_hashes(names):
+    """uint64 (N,): each body name's hash (BLAKE2b, the same in every process), 0 for a
+    free slot (None); the bodies' part of their contacts' ids."""
+    return np.array([0 if n is None else
+                     int.from_bytes(hashlib.blake2b(n.encode(), digest_size=8).digest(),
+                                    "little") for n in names], np.uint64)
+
+
+def stamp_key(stamp):
+    """The step's part of its new contacts' ids: the bits of the float64 ``stamp``."""
+    return np.float64(stamp).view(np.uint64)
+
 
 BEGAN = "began"
 PERSISTED = "persisted"
@@ -113,7 +131,7 @@ class Events:
 
 
 class ArbiterSet:
-    """All arbiters of a scene, as sorted arrays, and the contact id counter.
+    """All arbiters of a scene, as sorted arrays.
 
     merge_distance (m) > 0, drift_threshold (m) > 0, max_contacts >= 1,
     stale_steps >= 1 (attributes, may change between steps).
@@ -121,7 +139,8 @@ class ArbiterSet:
     State (read-only outside this class), arbiters sorted by key = a * KEY_BASE + b:
       keys int64 (A,), unconfirmed int64 (A,): steps in a row without confirmation,
       start int64 (A + 1,): arbiter k's contacts are rows [start[k], start[k + 1]);
-      contacts sorted by (key, id): c_id, c_age int64 (C,), c_la, c_lb float64 (C, 3)
+      contacts by key, each arbiter's oldest first: c_id, c_age int64 (C,), c_la, c_lb
+      float64 (C, 3)
       points in A's / B's body frame (m), c_na float64 (C, 3) normal in A's frame.
     """
 
@@ -130,7 +149,6 @@ class ArbiterSet:
         self.drift_threshold = float(drift_threshold)
         self.max_contacts = int(max_contacts)
         self.stale_steps = int(stale_steps)
-        self.next_id = 0
         z = np.zeros(0, np.int64)
         self.keys = z
         self.unconfirmed = z
@@ -152,7 +170,7 @@ class ArbiterSet:
         return self._pairs
 
     # ------------------------------------------------------------------------------
-    def update(self, pos_w, quat_w, touching, unconfirmed):
+    def update(self, pos_w, quat_w, touching, unconfirmed, stamp=0.0, body_hash=None):
         """Advance one step (dict form; the pipeline uses ``update_arrays``).
 
         pos_w float64 (N, 3), quat_w float64 (N, 4) unit xyzw: this step's poses.
@@ -160,7 +178,8 @@ class ArbiterSet:
             the narrow phase found touching, world frame, a < b, 1 <= m <= MAX_MANIFOLD.
         unconfirmed: set of pairs (a, b) the narrow phase could not decide (failed or not
             run); their arbiters are kept for ``stale_steps`` steps.
-        Every other existing arbiter has separated and ends.
+        Every other existing arbiter has separated and ends.  ``stamp`` (s) and
+        ``body_hash``: see ``update_arrays``.
         Returns the Events.
         """
         n = KEY_BASE
@@ -180,10 +199,12 @@ class ArbiterSet:
         ukeys = np.array(sorted(a * n + b for a, b in unconfirmed), np.int64)
         return self.update_arrays(np.ascontiguousarray(pos_w, np.float64),
                                   np.ascontiguousarray(quat_w, np.float64),
-                                  tkeys, cpts, cnormal, ccount, ukeys)
+                                  tkeys, cpts, cnormal, ccount, ukeys, stamp=stamp,
+                                  body_hash=body_hash)
 
     def update_arrays(self, pos_w, quat_w, tkeys, cpts, cnormal, ccount, ukeys,
-                      t_status=None, t_method=None, u_status=None, u_method=None):
+                      t_status=None, t_method=None, u_status=None, u_method=None,
+                      stamp=0.0, body_hash=None):
         """Advance one step (array form).
 
         pos_w float64 (N, 3), quat_w float64 (N, 4) unit xyzw, both C-contiguous.
@@ -193,10 +214,15 @@ class ArbiterSet:
         int64 (U,) sorted keys of the pairs the narrow phase could not decide.
         t_status, t_method int64 (T,), u_status, u_method int64 (U,): the pairs' status
         and method codes, reported with their contacts (default ST_NOT_RUN / 0).
+        stamp (s): the step's time; body_hash uint64 (N,): ``body_hashes`` of the
+        bodies' names (default: of their slot numbers); the new contacts' ids come from
+        both (module docstring).
         Returns the Events.
         """
         n = KEY_BASE
         t, u = len(tkeys), len(ukeys)
+        if body_hash is None:
+            body_hash = np.arange(len(pos_w), dtype=np.uint64)
         if t_status is None:
             t_status = np.full(t, ST_NOT_RUN, np.int64)
         if t_method is None:
@@ -220,9 +246,9 @@ class ArbiterSet:
                self.c_lb, self.c_na)
         new = (tkeys, t_status, t_method, cpts, cnormal, ccount)
         settings = (self.merge_distance, self.drift_threshold, k, self.stale_steps)
-        na, nc, ne, self.next_id = arbiter_step(
+        na, nc, ne = arbiter_step(
             n, old, new, (ukeys, u_status, u_method), pos_w, quat_w, settings,
-            self.next_id, out_arb, out_con, out_ev)
+            stamp_key(stamp), body_hash, out_arb, out_con, out_ev)
         self.keys = out_arb[0][:na]
         self.unconfirmed = out_arb[1][:na]
         self.start = out_arb[2][:na + 1]
@@ -255,7 +281,9 @@ class ArbiterSet:
         ev_id = np.full(total, -1, np.int64)
         is_contact = np.ones(total, bool)
         is_contact[at] = False
-        ev_id[is_contact] = self.c_id[c_hit]
+        ids = self.c_id[c_hit]                     # by pair, each pair's oldest first
+        group = np.repeat(np.arange(len(ends)), counts[ends])
+        ev_id[is_contact] = ids[np.lexsort((ids, group))]      # each pair's by id
         ended = Events(np.full(total, EV_ENDED, np.int64), ev_a, ev_b, ev_id)
         keep = ~hit
         self.keys = self.keys[keep]

@@ -90,7 +90,8 @@ from .results import ContactSet
 from .scene import POSE_PROBLEMS, Scene, pose_problems
 
 PIPELINE_SETTINGS = ("method", "contact_margin", "proximity", "merge_distance",
-                     "drift_threshold", "max_contacts", "stale_steps", "max_pairs")
+                     "drift_threshold", "max_contacts", "stale_steps", "max_pairs",
+                     "shard_index", "shard_count")
 REPROS_PER_STEP = 10       # repro lines logged per step at most (failures, cross-check)
 NO_ID = (1 << 64) - 1      # ContactArray id of a failed pair's entry (no persistent id)
 LATENCY_WINDOW = 1000      # steps in the latency percentiles
@@ -519,22 +520,25 @@ class CollisionNode(Node):
                        int((~finite).sum()))
             contacts = ContactSet.select(contacts, finite)
         frame = self.cfg["frame_id"]
+        shard = (self.cfg["shard_index"], self.cfg["shard_count"])
         self.pub_contacts.publish(
-            msg_adapters.contacts_to_contact_array(contacts, self.stamp, frame))
+            msg_adapters.contacts_to_contact_array(contacts, self.stamp, frame, shard))
         if np.any(res.events.kind != EV_PERSISTED):
             self.pub_events.publish(msg_adapters.events_to_contact_events(
-                res.events, res.names, self.stamp, frame))
+                res.events, res.names, self.stamp, frame, shard))
         if self.cfg["proximity"] > 0.0:
             self.pub_proximity.publish(msg_adapters.proximity_to_proximity_array(
-                res.proximity, res.names, self.stamp, frame))
+                res.proximity, res.names, self.stamp, frame, shard))
         now = time.monotonic()
         if self.cfg["publish_markers"] and now - self._markers_at >= 1.0 / self.cfg[
                 "marker_rate_hz"]:
             self._markers_at = now
             self.pub_markers.publish(self.painter.marker_array(
                 self.scene, contacts, self.stamp, frame, self.cfg["marker_normal_length"],
-                self.cfg["marker_deep_depth"], bodies=self.cfg["marker_bodies"],
-                max_bodies=self.cfg["marker_max_bodies"]))
+                self.cfg["marker_deep_depth"],
+                # one shard draws the bodies; each its own contact markers
+                bodies=self.cfg["marker_bodies"] and shard[0] == 0,
+                max_bodies=self.cfg["marker_max_bodies"], contact_marker_id=shard[0]))
         now = _seconds(self.get_clock().now().to_msg())
         self.latency.append(now - self.newest)
         if self.rerun is not None:
@@ -603,6 +607,7 @@ class CollisionNode(Node):
                 f"{k} {v}" for k, v in sorted(self.dropped.items()))
         values = {
             "kernels ready (s)": f"{self.warm_up_s:.2f}",
+            "shard": f"{self.cfg['shard_index']} of {self.cfg['shard_count']}",
             "steps": self.steps, "step rate (Hz)": f"{rate:.1f}",
             "latency p50 (ms)": f"{1e3 * np.percentile(lat, 50):.3f}",
             "latency p99 (ms)": f"{1e3 * np.percentile(lat, 99):.3f}",

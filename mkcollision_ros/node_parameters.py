@@ -67,6 +67,10 @@ PARAMETERS = (
           "is dropped", 1e-9, 100.0),
     Param("max_contacts", 4, "contacts kept per touching pair", 1, 16),
     Param("stale_steps", 3, "steps an unconfirmed pair is kept", 1, 1000),
+    Param("shard_index", 0, "this node's shard of the scene's pairs (README, \"Shards\")",
+          0, 1023, read_only=True),
+    Param("shard_count", 1, "nodes sharing the scene's pairs, each answering its shard; "
+          "1: this node answers every pair", 1, 1024, read_only=True),
     Param("publish_markers", True, "publish the MarkerArray"),
     Param("marker_normal_length", 0.2, "m; a normal line is this plus the depth long",
           0.0, 1000.0),

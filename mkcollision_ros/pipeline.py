@@ -59,7 +59,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from .arbiters import ArbiterSet, Events
+from .arbiters import ArbiterSet, Events, body_hashes
 from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world_aabbs
 from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_METHOD, OUT_NORMAL,
                                 OUT_PA, OUT_PB, OUT_SIZE, ST_FAILED, ST_NOT_RUN,
@@ -122,6 +122,8 @@ class PipelineConfig:
                     step runs the first max_pairs pairs (in key order), the rest are
                     NOT_RUN (their arbiters live on for stale_steps) and
                     ``StepResult.n_truncated_pairs`` counts them
+    shard_index, shard_count  0 <= shard_index < shard_count: this pipeline answers
+                    only the pairs of its shard (``shard_of``); 0, 1: every pair
     """
     method: str = "auto"
     contact_margin: float = 0.001
@@ -131,6 +133,8 @@ class PipelineConfig:
     max_contacts: int = 4
     stale_steps: int = 3
     max_pairs: int = 0
+    shard_index: int = 0
+    shard_count: int = 1
 
     @classmethod
     def from_dict(cls, d):
@@ -163,12 +167,37 @@ class PipelineConfig:
             if not _number_ok(v, 0.0, strict):
                 raise ValueError(f"pipeline config: {name} must be a finite number "
                                  f"{'>' if strict else '>='} 0 (m), got {v!r}")
-        for name, lo in (("max_contacts", 1), ("stale_steps", 1), ("max_pairs", 0)):
+        for name, lo in (("max_contacts", 1), ("stale_steps", 1), ("max_pairs", 0),
+                         ("shard_count", 1), ("shard_index", 0)):
             v = getattr(self, name)
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
                     or v < lo:
                 raise ValueError(f"pipeline config: {name} must be an integer >= {lo}, "
                                  f"got {v!r}")
+        if self.shard_index >= self.shard_count:
+            raise ValueError(f"pipeline config: shard_index must be below shard_count "
+                             f"({self.shard_count}), got {self.shard_index}")
+
+
+def _mix64(x):
+    """splitmix64's finalizer of uint64 array ``x`` (numpy wraps its uint64 arithmetic)."""
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def shard_of(hash_a, hash_b, shard_count):
+    """The shard (int64 (P,), 0 <= s < shard_count) of each pair of bodies with name
+    hashes ``hash_a``, ``hash_b`` (uint64 (P,), arbiters.body_hashes; A the lower
+    slot): a mix of the two hashes, modulo the count.  A pair's shard depends on its
+    two names alone, so it never moves while the scene runs and its arbiter stays on
+    one shard; and the mix spreads the pairs over the shards as a random draw would,
+    so each shard gets an equal share of every kind of pair, and of the cost, in
+    expectation (a cost-weighted split would have to move pairs as the scene changes)."""
+    with np.errstate(over="ignore"):
+        h = _mix64(np.asarray(hash_a, np.uint64) ^ _mix64(np.asarray(hash_b, np.uint64)
+                                                          + np.uint64(0x632BE59BD9B4E019)))
+    return (h % np.uint64(shard_count)).astype(np.int64)
 
 
 @dataclass
@@ -296,6 +325,8 @@ class Pipeline:
         self.arbiters = ArbiterSet(config.merge_distance, config.drift_threshold,
                                    config.max_contacts, config.stale_steps)
         self._pending = Events.empty()
+        self._hashes = np.zeros(0, np.uint64)
+        self._hashes_version = -1
         self.steps = 0
         self.rerun = None
         self.set_rerun(rerun, rerun_pairs)
@@ -410,6 +441,11 @@ class Pipeline:
         lap("broadphase")
         pairs = filter_pairs(candidates, view.static, view.group, view.mask, view.allowed,
                              KEY_BASE)
+        if self.config.shard_count > 1:
+            hashes = self._body_hashes()
+            mine = shard_of(hashes[pairs[:, 0]], hashes[pairs[:, 1]],
+                            self.config.shard_count) == self.config.shard_index
+            pairs = pairs[mine]
         lap("filter")
         narrow = self._narrow_phase(view, pairs)
         lap("narrowphase")
@@ -417,7 +453,7 @@ class Pipeline:
         lap("classify")
         manifolds = self._manifolds(view, narrow, classified)
         lap("manifold")
-        events = self._arbiters(view, classified, manifolds)
+        events = self._arbiters(view, classified, manifolds, stamp)
         lap("arbiters")
         if len(edit_events):
             events = Events.concat(edit_events, events)
@@ -540,11 +576,20 @@ class Pipeline:
                                narrow.out, self.config.drift_threshold, points, normal, count)
         return Manifolds(points, normal, count)
 
-    def _arbiters(self, view, c, manifolds):
+    def _body_hashes(self):
+        """uint64 (S,): arbiters.body_hashes of the slots' names, kept per scene version."""
+        if self._hashes_version != self.scene.version or \
+                len(self._hashes) != len(self.scene.names):
+            self._hashes = body_hashes(self.scene.names)
+            self._hashes_version = self.scene.version
+        return self._hashes
+
+    def _arbiters(self, view, c, manifolds, stamp):
         return self.arbiters.update_arrays(
             view.positions, view.orientations, c.touching_keys, manifolds.points,
             manifolds.normal, manifolds.count, c.undecided_keys, c.touching_status,
-            c.touching_method, c.undecided_status, c.undecided_method)
+            c.touching_method, c.undecided_status, c.undecided_method, stamp=stamp,
+            body_hash=self._body_hashes())
 
     def _result(self, names, stamp, narrow, classified, events, timings, n_candidates):
         con = self.arbiters.contacts()

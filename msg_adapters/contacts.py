@@ -16,9 +16,11 @@ from mkcollision_ros.arbiters import EV_PERSISTED
 from ._arrays import pack, view
 
 
-def contacts_to_contact_array(contacts, stamp=None, frame_id="world"):
-    """Contacts -> ``ContactArray`` (one message, struct-of-arrays)."""
+def contacts_to_contact_array(contacts, stamp=None, frame_id="world", shard=(0, 1)):
+    """Contacts -> ``ContactArray`` (one message, struct-of-arrays); ``shard`` (index,
+    count): the shard it comes from."""
     msg = ContactArray()
+    msg.shard_index, msg.shard_count = shard
     if stamp is not None:
         msg.header.stamp = stamp
     msg.header.frame_id = frame_id
@@ -84,10 +86,12 @@ def contacts_to_contact_list(contacts):
     return out
 
 
-def events_to_contact_events(events, names, stamp=None, frame_id="world"):
+def events_to_contact_events(events, names, stamp=None, frame_id="world", shard=(0, 1)):
     """A step's ``arbiters.Events`` -> ``ContactEvents`` with its began and ended events
-    (persisting ones left out); ``names`` maps body ids to names."""
+    (persisting ones left out); ``names`` maps body ids to names; ``shard`` as in
+    contacts_to_contact_array."""
     msg = ContactEvents()
+    msg.shard_index, msg.shard_count = shard
     if stamp is not None:
         msg.header.stamp = stamp
     msg.header.frame_id = frame_id
@@ -99,9 +103,12 @@ def events_to_contact_events(events, names, stamp=None, frame_id="world"):
     return msg
 
 
-def proximity_to_proximity_array(proximity, names, stamp=None, frame_id="world"):
-    """A step's ``pipeline.ProximitySet`` -> ``ProximityArray``."""
+def proximity_to_proximity_array(proximity, names, stamp=None, frame_id="world",
+                                 shard=(0, 1)):
+    """A step's ``pipeline.ProximitySet`` -> ``ProximityArray``; ``shard`` as in
+    contacts_to_contact_array."""
     msg = ProximityArray()
+    msg.shard_index, msg.shard_count = shard
     if stamp is not None:
         msg.header.stamp = stamp
     msg.header.frame_id = frame_id

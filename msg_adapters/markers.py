@@ -106,12 +106,14 @@ class MarkerPainter:
 
     def marker_array(self, scene, contacts, stamp=None, frame_id="world",
                      normal_length=0.2, deep=0.01, point_size=0.04, bodies=True,
-                     max_bodies=None):
+                     max_bodies=None, contact_marker_id=0):
         """The MarkerArray of ``scene``'s bodies (``bodies``) and of ``contacts`` (any
         object with ``body_a``, ``body_b``, ``position``, ``normal``, ``depth``); a body
         with a contact deeper than ``deep`` (m) is drawn red.  ``max_bodies``: at most
         this many body markers per array, the next ones in slot order each call (a
-        marker stays in RViz until replaced), so one array's cost stays bounded."""
+        marker stays in RViz until replaced), so one array's cost stays bounded.
+        ``contact_marker_id``: the id of the contact points' and normals' markers (one
+        per shard of a scene, so the shards' markers do not replace each other)."""
         out = MarkerArray()
         if bodies:
             depth = np.full(scene.n_slots, -1.0)
@@ -146,7 +148,7 @@ class MarkerPainter:
             self._bodies = {slot: kept for slot, kept in live.items() if kept is not None}
         pos = np.asarray(contacts.position, float)
         for ns, kind in (("contacts", Marker.SPHERE_LIST), ("normals", Marker.LINE_LIST)):
-            m = Marker(ns=ns, id=0, type=kind)
+            m = Marker(ns=ns, id=int(contact_marker_id), type=kind)
             m.header.frame_id = frame_id
             if stamp is not None:
                 m.header.stamp = stamp

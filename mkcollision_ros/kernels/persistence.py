@@ -9,6 +9,15 @@ the drift threshold, the set reduced to ``max_contacts`` (deepest, farthest, the
 largest hull area: Bullet's ``sortCachedPoints``, Jolt's ``PruneContactPoints``), and
 the surviving new ones get ids; events and the compacted new state are written to
 preallocated arrays.  See arbiters.py.  Events: EV_BEGAN, EV_PERSISTED, EV_ENDED (below).
+
+Contact ids are a function of the pair and the step, not of a counter: a new contact's
+id is a 64-bit mix (splitmix64's finalizer) of its two bodies' hashes (``body_hash``,
+from their names), the step's ``id_key`` (the bits of its stamp) and its sequence
+number among the pair's new contacts of the step, masked to 63 bits (>= 0); the
+sequence number is passed over when the mix equals an id the pair holds, so a pair's
+ids are distinct at any time.  So every process that runs a pair on the same poses and
+stamps hands out the same ids, whichever other pairs it runs (the shards of a scene,
+pipeline.py).  Two pairs share an id with probability about (contacts alive)^2 / 2^64.
 """
 import math
 
@@ -24,6 +33,29 @@ EV_BEGAN = 0
 EV_PERSISTED = 1
 EV_ENDED = 2
 _FRESH_RANK = 1 << 62      # tie rank of contacts without an id yet (after every stored one)
+# splitmix64's constants (the contact ids' mix, module docstring)
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX_1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX_2 = np.uint64(0x94D049BB133111EB)
+_ID_MASK = np.uint64(0x7FFFFFFFFFFFFFFF)
+
+
+@njit_kernel
+def _mix64(x):
+    """splitmix64's finalizer of the uint64 ``x``: a bijection that spreads every bit."""
+    x = (x ^ (x >> np.uint64(30))) * _MIX_1
+    x = (x ^ (x >> np.uint64(27))) * _MIX_2
+    return x ^ (x >> np.uint64(31))
+
+
+@njit_kernel
+def contact_id(hash_a, hash_b, id_key, seq):
+    """The id (int64 >= 0) of a pair's new contact: bodies' hashes ``hash_a``,
+    ``hash_b`` (uint64, A the lower slot), the step's ``id_key`` (uint64) and the
+    sequence number ``seq`` (int64 >= 0) among the pair's new contacts of the step."""
+    pair = _mix64(hash_a ^ _mix64(hash_b + _GOLDEN))
+    step = _mix64(id_key + np.uint64(seq) * _GOLDEN)
+    return np.int64(_mix64(pair ^ step) & _ID_MASK)
 
 
 @njit_kernel
@@ -145,10 +177,10 @@ def _reduce(mid, depth, rank, n, m, k, keep, depth_tie):
 
 
 @njit_kernel
-def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, out_arb,
-                 out_con, out_ev):
-    """All arbiters of a scene for one step, in one serial pass (ids are handed out in
-    key order, so they are deterministic).  Keys are ``a * n_bodies + b`` with a < b.
+def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, id_key, body_hash,
+                 out_arb, out_con, out_ev):
+    """All arbiters of a scene for one step, in one serial pass.  Keys are ``a *
+    n_bodies + b`` with a < b.
 
     old: the state of the previous step, a tuple
         (keys int64 (A,) sorted, unconfirmed int64 (A,) steps without confirmation,
@@ -163,17 +195,19 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
         (ukeys int64 (U,) sorted, u_status int64 (U,), u_method int64 (U,)).
     pos_w (N, 3) m, quat_w (N, 4) unit xyzw: this step's poses.
     settings: (merge_distance m, drift_threshold m, max_contacts int, stale_steps int).
-    next_id: the first contact id to hand out.
+    id_key uint64, body_hash uint64 (N,): the step's key and the bodies' hashes, of
+        which new contacts' ids are made (module docstring).
     out_arb: (keys, unconfirmed int64 (>= A + T,), start int64 (>= A + T + 1,),
         pairs int64 (>= A + T, 2)) - the new state, arbiter rows.
     out_con: (body_a, body_b, id, age int64, la, lb, na, point_a, point_b, normal
         float64 (., 3), depth float64, status, method int64), at least
-        (A + T) * max_contacts rows: the new contacts, by pair then id; point_a, point_b,
+        (A + T) * max_contacts rows: the new contacts, by pair, then stored ones
+        oldest first, then new ones in manifold order; point_a, point_b,
         normal in the world (m), depth >= 0 (m), status / method the pair's this step.
     out_ev: (kind int64 (EV_*), body_a, body_b, id int64), at least
         (A + T) * (1 + max_contacts) + S + T * MAX_MANIFOLD rows: events by pair, the
         pair's event (id -1) first, then its contacts' by id.
-    Returns (arbiters, contacts, events, next_id).
+    Returns (arbiters, contacts, events).
     """
     o_keys, o_unc, o_start, o_id, o_age, o_la, o_lb, o_na = old
     tkeys, t_status, t_method, cpts, cnormal, ccount = new
@@ -313,7 +347,7 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
                 if j >= 0:
                     ids[m] = sid[j]
                     age[m] = sage[j]
-                    rank[m] = sid[j]
+                    rank[m] = j          # the stored order: oldest first
                 else:
                     ids[m] = -1
                     age[m] = 0
@@ -336,7 +370,7 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
                         nn[m, q] = sn[j, q]
                     ids[m] = sid[j]
                     age[m] = sage[j]
-                    rank[m] = sid[j]
+                    rank[m] = j
                     m += 1
                 else:
                     t_id[te] = sid[j]
@@ -369,7 +403,8 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
                 k = m
                 for c in range(m):
                     keep[c] = c
-            # order the survivors: stored ones by id, then fresh ones in manifold order
+            # order the survivors: stored ones as stored (oldest first), then fresh ones
+            # in manifold order
             for c in range(1, k):
                 v = keep[c]
                 d = c - 1
@@ -377,11 +412,23 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
                     keep[d + 1] = keep[d]
                     d -= 1
                 keep[d + 1] = v
+            seq = np.int64(0)
             for c in range(k):
                 src = keep[c]
                 if ids[src] < 0:
-                    ids[src] = next_id
-                    next_id += 1
+                    while True:          # an id the pair does not hold (module docstring)
+                        cid = contact_id(body_hash[ia], body_hash[ib], id_key, seq)
+                        seq += 1
+                        held = False
+                        for q in range(k):
+                            if ids[keep[q]] == cid:
+                                held = True
+                        for q in range(m_old):       # ending ones too: no id ends and
+                            if sid[q] == cid:        # begins in one step
+                                held = True
+                        if not held:
+                            break
+                    ids[src] = cid
                     t_kind[te] = EV_BEGAN
                 else:
                     t_kind[te] = EV_PERSISTED
@@ -445,4 +492,4 @@ def arbiter_step(n_bodies, old, new, unconf, pos_w, quat_w, settings, next_id, o
             io += 1
         if has_t:
             it += 1
-    return na, nc, ne, next_id
+    return na, nc, ne

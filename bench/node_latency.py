@@ -17,9 +17,12 @@ Reported: messages published from the first one the node answered on (the ones b
 were lost to discovery), how many of those were answered (distinct stamps), the
 unanswered share, latency p50 / p99 / max (ms) over the answered ones after the first
 second, and the node's CPU (user + system time over the run / its length, 1.0 = one
-core).
+core).  With ``--shards 1 2``, each case also runs as two node processes, the shards of
+the scene (shard_index 0 and 1 of shard_count 2): a stamp is answered once both shards'
+messages arrived, its latency that of the later one, and the CPU is the two nodes'.
 
     . tools/env.sh && python bench/node_latency.py [--bodies 100 1000] [--seconds 10]
+        [--shards 1 2]
 """
 import argparse
 import os
@@ -97,7 +100,7 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run_case(n, rate, kind, markers, seconds):
+def run_case(n, rate, kind, markers, seconds, shards=1):
     import rclpy
     from mkcollision_msgs.msg import ContactArray
     from mkcollision_ros.demo import die_with_parent, node_executable
@@ -105,41 +108,52 @@ def run_case(n, rate, kind, markers, seconds):
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "params.yaml")
         params_file(n, markers, path)
-        node = subprocess.Popen([node_executable(), "--ros-args", "--params-file", path],
-                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                start_new_session=True, preexec_fn=die_with_parent)
+        shard_args = [[] if shards == 1 else
+                      ["-r", f"__node:=collision_node_{k}", "-p", f"shard_index:={k}",
+                       "-p", f"shard_count:={shards}"] for k in range(shards)]
+        nodes = [subprocess.Popen([node_executable(), "--ros-args", "--params-file", path,
+                                   *extra], stdout=subprocess.PIPE,
+                                  stderr=subprocess.STDOUT, text=True,
+                                  start_new_session=True, preexec_fn=die_with_parent)
+                 for extra in shard_args]
         ready = time.time() + 900
-        for line in node.stdout:                          # wait for "kernels ready"
-            if "kernels ready" in line or time.time() > ready:
-                break
+        for node in nodes:
+            for line in node.stdout:                      # wait for "kernels ready"
+                if "kernels ready" in line or time.time() > ready:
+                    break
         rclpy.init()
         sub = rclpy.create_node("latency_subscriber")
-        seen = {}
+        seen, parts = {}, {}
 
         def on_contacts(msg):
             s = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
-            seen.setdefault(s, time.time() - s)
+            got = parts.setdefault(s, set())
+            got.add(msg.shard_index)
+            if len(got) == shards:                        # the stamp's whole answer
+                seen.setdefault(s, time.time() - s)
         sub.create_subscription(ContactArray, "contacts", on_contacts, 100)
         pub = subprocess.Popen([sys.executable, "-c", PUBLISHER, root, str(n), str(rate),
                                 str(seconds), kind], stdout=subprocess.PIPE, text=True)
-        c0, w0 = cpu_seconds(node.pid), time.time()
+        c0, w0 = sum(cpu_seconds(node.pid) for node in nodes), time.time()
         while pub.poll() is None:
             rclpy.spin_once(sub, timeout_sec=0.01)
         end = time.time() + 1.0
         while time.time() < end:
             rclpy.spin_once(sub, timeout_sec=0.01)
-        cpu = (cpu_seconds(node.pid) - c0) / (time.time() - w0)
+        cpu = (sum(cpu_seconds(node.pid) for node in nodes) - c0) / (time.time() - w0)
         sent = [float(x) for x in pub.stdout.read().split()]
         sub.destroy_node()
         rclpy.shutdown()
-        node.terminate()
-        node.wait(timeout=30)
+        for node in nodes:
+            node.terminate()
+            node.wait(timeout=30)
     stamps = sorted(seen)
     lat = np.array([seen[s] for s in stamps if s > stamps[0] + 1.0]) if stamps else np.zeros(1)
     # messages sent once the node had answered one (before that: discovery)
     published = [s for s in sent if stamps and s >= stamps[0]]
     answered = set(stamps) & set(published)
-    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(len(published)),
+    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(shards),
+            str(len(published)),
             str(len(answered)), f"{1 - len(answered) / max(len(published), 1):.1%}",
             f"{1e3 * np.percentile(lat, 50):.2f}", f"{1e3 * np.percentile(lat, 99):.2f}",
             f"{1e3 * lat.max():.2f}", f"{cpu:.2f}"]
@@ -152,14 +166,18 @@ def main():
     ap.add_argument("--seconds", type=float, default=10.0)
     ap.add_argument("--inputs", nargs="+", default=["BodyPoseArray", "PoseArray"])
     ap.add_argument("--markers", nargs="+", default=["off", "on"])
+    ap.add_argument("--shards", type=int, nargs="+", default=[1],
+                    help="node processes sharing the scene's pairs, one case each")
     args = ap.parse_args()
     rows = []
     for n in args.bodies:
         for kind in args.inputs:
             for markers in args.markers:
-                rows.append(run_case(n, args.rate, kind, markers == "on", args.seconds))
-                print("  done", rows[-1][:4], file=sys.stderr, flush=True)
-    head = ["bodies", "rate Hz", "input", "markers", "published", "answered",
+                for shards in args.shards:
+                    rows.append(run_case(n, args.rate, kind, markers == "on", args.seconds,
+                                         shards))
+                    print("  done", rows[-1][:5], file=sys.stderr, flush=True)
+    head = ["bodies", "rate Hz", "input", "markers", "shards", "published", "answered",
             "unanswered", "p50 ms", "p99 ms", "max ms", "node CPU"]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))

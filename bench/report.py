@@ -87,6 +87,16 @@ SECTIONS = (
         "same two cores; the node reads it from its CDR bytes.  Goal: 1,000 bodies at "
         "100 Hz with every message answered and p99 under 3 ms."),
     Section(
+        "node_shards", "Shards: one node or two at 10,000 bodies",
+        ("bench/node_latency.py", "--bodies", "10000", "--rate", "30", "--inputs",
+         "BodyPoseArray", "--markers", "off", "--shards", "1", "2", "--seconds", "10"),
+        "The same end-to-end measurement at 10,000 bodies and 30 Hz, with the scene's "
+        "pairs answered by one node, then by two node processes as its shards "
+        "(README, \"Shards\"): a stamp counts as answered once both shards' contacts "
+        "arrived, its latency that of the later one; \"node CPU\" adds the nodes'.  "
+        "Four processes share the two cores.  Goal (10,000 bodies at 30 Hz): p99 under "
+        "25 ms; the question: do two shards on this machine beat one node."),
+    Section(
         "rerun", "Rerun logging",
         ("bench/rerun_cost.py", "--steps", "300"),
         "After each `Pipeline.step` of the bench scene (paced at 100 Hz, 10,000 bodies "

@@ -13,7 +13,9 @@ def query_contacts(table: ShapeTable, names, indices, positions, orientations, s
     """Contacts among bodies ``indices`` (int64 (K,)) at the given world poses.
 
     ``positions`` (N, 3) / ``orientations`` (N, 4) unit quat_xyzw hold every body's pose
-    (only rows in ``indices`` are read); static-static pairs are skipped.
+    (only rows in ``indices`` are read); static-static pairs are skipped.  As in the
+    pipeline, a pair with a plane takes the closed form (M_AUTO) whatever ``method``
+    (GJK/EPA and MPR do not run on a half-space).
     """
     idx = np.asarray(indices, dtype=np.int64)
     ii, jj = np.triu_indices(len(idx), k=1)
@@ -23,11 +25,19 @@ def query_contacts(table: ShapeTable, names, indices, positions, orientations, s
     pairs = np.ascontiguousarray(pairs[~(static[pairs[:, 0]] & static[pairs[:, 1]])])
     out = np.zeros((len(pairs), C.OUT_SIZE))
     status = np.zeros(len(pairs), dtype=np.int64)
-    if len(pairs):
-        collide_batch(table.codes, table.params, table.vrange, table.verts, pairs,
-                      np.ascontiguousarray(positions, dtype=np.float64),
-                      np.ascontiguousarray(orientations, dtype=np.float64),
-                      method, 0.0, out, status)
+    pos = np.ascontiguousarray(positions, dtype=np.float64)
+    quat = np.ascontiguousarray(orientations, dtype=np.float64)
+    is_plane = np.asarray(table.codes) == C.PLANE
+    has_plane = is_plane[pairs[:, 0]] | is_plane[pairs[:, 1]]
+    for sel, m in ((has_plane, C.M_AUTO), (~has_plane, method)):
+        if sel.any():
+            rows = np.flatnonzero(sel)
+            o = np.zeros((len(rows), C.OUT_SIZE))
+            st = np.zeros(len(rows), dtype=np.int64)
+            collide_batch(table.codes, table.params, table.vrange, table.verts,
+                          np.ascontiguousarray(pairs[rows]), pos, quat, np.int64(m), 0.0,
+                          o, st)
+            out[rows], status[rows] = o, st
     hit = (status == C.ST_TOUCHING) | (status == C.ST_PENETRATING)
     rows, pairs = out[hit], pairs[hit]
     pa, pb = rows[:, C.OUT_PA:C.OUT_PA + 3], rows[:, C.OUT_PB:C.OUT_PB + 3]

@@ -259,10 +259,14 @@ def sharing(report=print, jobs=2, plan=None):
     are split with a helper process (module docstring, "Two processes") when ``jobs`` >
     1 and the cache lacks any of them; the helper's lines go to ``report``.  Leaves
     the helper finished."""
+    from numba import config
+    if jobs < 2 or config.DISABLE_JIT:       # pure-Python runs compile nothing
+        yield
+        return
     if plan is None:
         full = planned_signatures()
         plan = {key: full[key] for key in SHARED_KERNELS}
-    if jobs < 2 or _cached(plan):
+    if _cached(plan):
         yield
         return
     with tempfile.TemporaryDirectory(prefix="mkcollision-compile-") as folder:

@@ -15,11 +15,12 @@ step it receives the pair's new contacts (world frame, from the manifold) and:
      63-bit mix of the two bodies' name hashes (``body_hashes``), the step's stamp
      (``stamp_key``) and its number among the pair's new contacts of the step, never
      one the pair holds (kernels/persistence.py); so any process that runs the pair on
-     the same poses and stamps gives it the same ids, whatever else it runs (shards).  Matching comes before the drift rule
-     (as Bullet's getCacheEntry comes before refreshContactPoints): a body sliding or
-     spinning faster than ``drift_threshold`` per step moves the stored point on the
-     other body away, but the new point is still where the stored one is on its own
-     body, so the id survives (the demo's id churn; tests/test_pipeline.py);
+     the same poses and stamps gives it the same ids, whatever else it runs (shards).
+     Matching comes before the drift rule (as Bullet's getCacheEntry comes before
+     refreshContactPoints): a body sliding or spinning faster than ``drift_threshold``
+     per step moves the stored point on the other body away, but the new point is
+     still where the stored one is on its own body, so the id survives (the demo's id
+     churn; tests/test_pipeline.py);
   3. stored contacts not matched survive (``persisted``) while their points, re-expressed
      in the world, are within ``drift_threshold`` (m) of each other along the normal
      (separating) and across it; otherwise they end (``ended``);

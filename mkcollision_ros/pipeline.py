@@ -23,7 +23,7 @@ One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
   narrowphase  kernels/narrowphase.collide_batch with ``config.method``, exact up to the
                reach (farther pairs stop at a certified lower bound); pairs with a plane
                always use the closed form (``auto``), as GJK/EPA and MPR do not take
-               unbounded shapes
+               unbounded shapes (query.collide_pairs, shared with check_collision)
   classify     touching pairs (the narrow phase's touching rule, the same as
                ``collide``'s, or an existing arbiter within ``contact_margin``: the
                hysteresis below), proximity pairs, and undecided pairs (failed, not run)
@@ -65,7 +65,7 @@ from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_METHOD, OUT_
                                 OUT_PA, OUT_PB, OUT_SIZE, ST_FAILED, ST_NOT_RUN,
                                 ST_SEPARATED, ST_TOUCHING)
 from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
-from .kernels.narrowphase import collide_batch
+from .query import collide_pairs
 from .results import ContactSet
 from .scene import KEY_BASE, Scene
 
@@ -518,28 +518,9 @@ class Pipeline:
         return NarrowPhase(pairs, out, status)
 
     def _run_narrow_phase(self, t, pairs, pos, quat, out, status):
-        npairs = len(pairs)
-        reach = self._reach()
         par = self.parallel_min_items
-        if self._method == M_AUTO:
-            with _threads(npairs, par):
-                collide_batch(t.codes, t.params, t.vrange, t.verts, pairs, pos, quat,
-                              M_AUTO, reach, out, status)
-        else:
-            # pairs with a plane use the closed form (auto) whatever the method
-            is_plane = self.scene.is_plane
-            has_plane = is_plane[pairs[:, 0]] | is_plane[pairs[:, 1]]
-            for sel, method in ((has_plane, M_AUTO), (~has_plane, self._method)):
-                idx = np.flatnonzero(sel)
-                if len(idx):
-                    o = np.empty((len(idx), OUT_SIZE))
-                    s = np.empty(len(idx), np.int64)
-                    with _threads(len(idx), par):
-                        collide_batch(t.codes, t.params, t.vrange, t.verts,
-                                      np.ascontiguousarray(pairs[idx]), pos, quat, method,
-                                      reach, o, s)
-                    out[idx] = o
-                    status[idx] = s
+        collide_pairs(t, pairs, pos, quat, self._method, self._reach(), out, status,
+                      threads=lambda n: _threads(n, par))
 
     def _classify(self, narrow):
         pairs, out, status = narrow

@@ -17,11 +17,12 @@ names raise ValueError.
 import numpy as np
 
 from .kernels.constants import METHOD_NAMES, OUT_SIZE
-from .kernels.narrowphase import collide_batch, collide_world
+from .kernels.narrowphase import collide_batch
 from .results import CollisionResult
 from .shapes import point_count, shape_row, validate_pose
 
 _METHODS = {name: code for code, name in enumerate(METHOD_NAMES)}
+_ONE_PAIR = np.array([[0, 1]], dtype=np.int64)
 
 
 def _method_code(method):
@@ -54,10 +55,14 @@ def collide(shape_a, pose_a, shape_b, pose_b, method="auto"):
     pos_b, q_b = validate_pose(pose_b, "pose_b")
     verts = np.ascontiguousarray(np.concatenate([verts_a, verts_b]).reshape(-1, 3),
                                  dtype=np.float64)
-    out = np.zeros(OUT_SIZE)
-    st = collide_world(ca, pa, va, cb, pb, vb, verts, pos_a, q_a, pos_b, q_b,
-                       np.int64(m), out)
-    return CollisionResult.from_row(st, out)
+    # a batch of one pair: the pipeline's own compiled loop, so collide() gives the
+    # pipeline's numbers to the last bit, and no second copy of it is compiled
+    out = np.zeros((1, OUT_SIZE))
+    status = np.zeros(1, dtype=np.int64)
+    collide_batch(np.array([ca, cb]), np.stack([pa, pb]), np.stack([va, vb]), verts,
+                  _ONE_PAIR, np.stack([pos_a, pos_b]), np.stack([q_a, q_b]), np.int64(m),
+                  np.inf, out, status)
+    return CollisionResult.from_row(int(status[0]), out[0])
 
 
 def distance(shape_a, pose_a, shape_b, pose_b):

@@ -65,6 +65,7 @@ from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_METHOD, OUT_
                                 OUT_PA, OUT_PB, OUT_SIZE, ST_FAILED, ST_NOT_RUN,
                                 ST_SEPARATED, ST_TOUCHING)
 from .kernels.manifold import MAX_MANIFOLD, manifold_batch, split_pairs
+from .kernels.persistence import pair_shards
 from .query import collide_pairs
 from .results import ContactSet
 from .scene import KEY_BASE, Scene
@@ -123,7 +124,8 @@ class PipelineConfig:
                     NOT_RUN (their arbiters live on for stale_steps) and
                     ``StepResult.n_truncated_pairs`` counts them
     shard_index, shard_count  0 <= shard_index < shard_count: this pipeline answers
-                    only the pairs of its shard (``shard_of``); 0, 1: every pair
+                    only the pairs of its shard (kernels/persistence.pair_shards); 0, 1:
+                    every pair
     """
     method: str = "auto"
     contact_margin: float = 0.001
@@ -177,27 +179,6 @@ class PipelineConfig:
         if self.shard_index >= self.shard_count:
             raise ValueError(f"pipeline config: shard_index must be below shard_count "
                              f"({self.shard_count}), got {self.shard_index}")
-
-
-def _mix64(x):
-    """splitmix64's finalizer of uint64 array ``x`` (numpy wraps its uint64 arithmetic)."""
-    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return x ^ (x >> np.uint64(31))
-
-
-def shard_of(hash_a, hash_b, shard_count):
-    """The shard (int64 (P,), 0 <= s < shard_count) of each pair of bodies with name
-    hashes ``hash_a``, ``hash_b`` (uint64 (P,), arbiters.body_hashes; A the lower
-    slot): a mix of the two hashes, modulo the count.  A pair's shard depends on its
-    two names alone, so it never moves while the scene runs and its arbiter stays on
-    one shard; and the mix spreads the pairs over the shards as a random draw would,
-    so each shard gets an equal share of every kind of pair, and of the cost, in
-    expectation (a cost-weighted split would have to move pairs as the scene changes)."""
-    with np.errstate(over="ignore"):
-        h = _mix64(np.asarray(hash_a, np.uint64) ^ _mix64(np.asarray(hash_b, np.uint64)
-                                                          + np.uint64(0x632BE59BD9B4E019)))
-    return (h % np.uint64(shard_count)).astype(np.int64)
 
 
 @dataclass
@@ -442,10 +423,9 @@ class Pipeline:
         pairs = filter_pairs(candidates, view.static, view.group, view.mask, view.allowed,
                              KEY_BASE)
         if self.config.shard_count > 1:
-            hashes = self._body_hashes()
-            mine = shard_of(hashes[pairs[:, 0]], hashes[pairs[:, 1]],
-                            self.config.shard_count) == self.config.shard_index
-            pairs = pairs[mine]
+            shard = np.empty(len(pairs), np.int64)
+            pair_shards(self._body_hashes(), pairs, np.int64(self.config.shard_count), shard)
+            pairs = pairs[shard == self.config.shard_index]
         lap("filter")
         narrow = self._narrow_phase(view, pairs)
         lap("narrowphase")
@@ -627,3 +607,5 @@ class Pipeline:
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
         cluster.step(pos, quat, 0.0)
         cluster.step(pos, quat, 0.0)
+        pair_shards(body_hashes(["a", "b"]), np.array([[0, 1]]), np.int64(2),
+                    np.empty(1, np.int64))

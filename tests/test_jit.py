@@ -191,3 +191,52 @@ def _compiled_kernel_calls_with_constants():
 def test_no_compiled_kernel_is_called_with_a_literal_constant():
     assert _compiled_kernel_calls_with_constants() == [], \
         "write the constant as np.int64(c) or np.bool_(c) (kernels/jit.py, 'Literal')"
+
+
+def test_run_blocks_covers_every_item_once_on_the_thread_count_asked_for():
+    import threading
+    seen, threads = [], set()
+
+    def kernel(tag, lo, hi):
+        assert tag == "t"
+        seen.append((lo, hi))
+        threads.add(threading.get_ident())
+
+    old = numba.get_num_threads()
+    try:
+        for n_threads, n_items, min_block, blocks in ((1, 1000, 10, 1), (2, 1000, 10, 2),
+                                                      (2, 10, 10, 1), (2, 0, 10, 1)):
+            numba.set_num_threads(n_threads)
+            seen.clear()
+            threads.clear()
+            jit.run_blocks(kernel, ("t",), n_items, min_block)
+            assert len(seen) == blocks
+            covered = sorted(seen)
+            assert covered[0][0] == 0 and covered[-1][1] == n_items
+            assert all(a[1] == b[0] for a, b in zip(covered, covered[1:]))
+            assert max(hi - lo for lo, hi in covered) - min(hi - lo for lo, hi in covered) <= 1
+            assert len(threads) == blocks      # the first block on this thread, one more
+    finally:
+        numba.set_num_threads(old)
+
+
+def test_run_blocks_raises_a_failing_block_after_every_block_ends():
+    done = []
+
+    def kernel(lo, hi):
+        if lo > 0:
+            raise ValueError("block failed")
+        done.append(lo)
+
+    old = numba.get_num_threads()
+    try:
+        numba.set_num_threads(2)
+        try:
+            jit.run_blocks(kernel, (), 100, 10)
+        except ValueError as e:
+            assert "block failed" in str(e)
+        else:
+            raise AssertionError("the failing block's error was not raised")
+        assert done == [0]
+    finally:
+        numba.set_num_threads(old)

@@ -11,7 +11,7 @@ KERNEL_OK = {"numpy", "numba", "math", "__future__"}
 # jit.py alone may use the standard library: to place numba's cache, to raise the
 # garbage collector's thresholds while numba compiles and for the inliner's one-memo
 # copy (see its docstring)
-JIT_EXTRA = {"os", "hashlib", "gc", "copy"}
+JIT_EXTRA = {"os", "hashlib", "gc", "copy", "threading", "concurrent"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}
 ROS_MODULES = {"node.py", "node_parameters.py", "demo.py"}

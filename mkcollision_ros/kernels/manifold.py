@@ -41,7 +41,7 @@ from .constants import (BOX, CAPSULE, CONE, CONTACT_SAME_SQ, CONVEX, CYLINDER, E
                         P_MARGIN, P_RADIUS, REF_COS, REF_TIE, ST_PENETRATING, ST_SEPARATED,
                         ST_TOUCHING)
 from .geometry import inflation, quat_to_matrix_into
-from .jit import block_bounds, borrow, keep_alive, n_blocks, njit_kernel, njit_parallel, prange
+from .jit import borrow, keep_alive, njit_kernel, run_blocks
 
 MAX_FEATURE = 8          # points of a supporting feature (cylinder cap as an 8-gon)
 MAX_MANIFOLD = 16        # clipped points of one pair (<= 2 * MAX_FEATURE)
@@ -491,17 +491,6 @@ def _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, ou
     keep_alive(own)
 
 
-@njit_parallel
-def _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                    keep_dist, cpts, cnormal, ccount, nb):
-    """``manifold_batch`` in ``nb`` blocks."""
-    n_rows = rows.shape[0]
-    for blk in prange(nb):
-        lo, hi = block_bounds(n_rows, nb, blk)
-        _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                        keep_dist, cpts, cnormal, ccount, lo, hi)
-
-
 def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
                    keep_dist, cpts, cnormal, ccount):
     """Contact manifolds of the touching pairs ``pairs[rows]``.
@@ -518,16 +507,12 @@ def manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out
     ccount int64 (>= T,) out: contacts of the pair (>= 1).
     Row k of the outputs is pair ``rows[k]``; rows run in contiguous blocks, one per
     thread (none smaller than MANIFOLD_CHUNK), with one scratch workspace each; every row
-    writes only its own slots: deterministic for any thread count.  A Python function
-    around the parallel kernel ``_manifold_batch`` (see narrowphase.collide_batch).
+    writes only its own slots: deterministic for any thread count (jit.run_blocks, as
+    narrowphase.collide_batch).
     """
-    nb = n_blocks(rows.shape[0], MANIFOLD_CHUNK)
-    if nb == 1:   # without the parallel launch (narrowphase.collide_batch)
-        _manifold_block(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                        keep_dist, cpts, cnormal, ccount, 0, rows.shape[0])
-    else:
-        _manifold_batch(codes, params, vrange, verts, pairs, rows, pos_w, quat_w, out,
-                        keep_dist, cpts, cnormal, ccount, nb)
+    run_blocks(_manifold_block, (codes, params, vrange, verts, pairs, rows, pos_w, quat_w,
+                                 out, keep_dist, cpts, cnormal, ccount),
+               rows.shape[0], MANIFOLD_CHUNK)
 
 
 @njit_kernel

@@ -10,10 +10,10 @@ pair, so the per-pair path allocates nothing.  Each pair writes only its own row
 ``out`` / ``status`` and no state survives between pairs, so the result does not depend
 on the thread count.
 
-Route of one pair in ``collide_world_ws`` (behind collide_world and collide_batch):
+Route of one pair in ``collide_world_ws`` (behind collide_batch):
   1. Two bodies without a plane whose bounding spheres (P_RADIUS about the body origins)
      are apart by more than max(cutoff, TOUCH_TOL * scale) end SEPARATED with that gap,
-     whatever the method (never with cutoff inf, which collide_world passes).
+     whatever the method (never with cutoff inf, which the API's collide passes).
   2. Methods auto and analytic: a shape against a half-space, a sphere against a shape
      with a sphere-* closed form, and two capsules are solved in the world frame.
   3. Otherwise B's pose in A's frame (r_ab, t_ab), then the method's kernel; a pair out
@@ -145,8 +145,7 @@ from .geometry import (borrow_args, quat_entries, quat_rotate_xyz, quat_to_matri
                        shape_scale, support_full_xyz)
 from .gjk_epa import gjk_epa_ws
 from .gjk_epa_workspace import borrow_gjk_workspace, make_gjk_workspace
-from .jit import (block_bounds, borrow, keep_alive, n_blocks, njit_inline, njit_kernel,
-                  njit_parallel, prange)
+from .jit import borrow, keep_alive, n_blocks, njit_inline, njit_kernel, njit_parallel, prange
 from .mpr import MPR_WS_ROWS, mpr_ws
 from .pairs.box_box import collide_box_box
 from .pairs.capsule_capsule import capsule_capsule_world
@@ -384,23 +383,15 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     return dist
 
 
-@njit_kernel
-def collide_world(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
-                  pos_b, quat_b, method, out):
-    """One pair from world poses; ``out`` (OUT_SIZE,) in the WORLD frame.
-
-    prm_* float64 (8,), vr_* int64 (2,) (first vertex, count), pos_* float64 (3,) m,
-    quat_* float64 (4,) xyzw unit.  Returns the status code.  Allocates its scratch
-    buffers; loops use ``collide_world_ws``."""
-    return collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a,
-                            quat_a, pos_b, quat_b, method, out, make_workspace(), math.inf)
-
-
 @njit_inline
 def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, quat_a,
                      pos_b, quat_b, method, out, ws, cutoff):
-    """``collide_world`` with caller-provided scratch buffers ``ws`` (make_workspace())
-    and a distance ``cutoff`` (m, may be inf; see collide_batch).
+    """One pair from world poses, with caller-provided scratch buffers ``ws``
+    (make_workspace()) and a distance ``cutoff`` (m, may be inf; see collide_batch).
+
+    prm_* float64 (8,), vr_* int64 (2,) (first vertex, count), pos_* float64 (3,) m,
+    quat_* float64 (4,) xyzw unit; ``out`` (OUT_SIZE,) in the WORLD frame.  Returns the
+    status code.
 
     Inlined (with analytic.closed_form_ordered and analytic._ordered) into the batch
     loop: a call that passes arrays costs numba a reference-count call per array even
@@ -524,12 +515,16 @@ def _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, c
 @njit_parallel
 def _collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
                    out, status, nb):
-    """``collide_batch`` in ``nb`` blocks."""
+    """``collide_batch`` in ``nb`` blocks, block b the pairs [b P / nb, (b + 1) P / nb).
+
+    numba's parallel launch rather than jit.run_blocks: it hands the blocks over in
+    ~3 us, where Python threads take 0.1-0.3 ms, as much as a 1,000-body scene's whole
+    narrow phase on two threads.  It costs ~25 s of the first compile (LLVM optimises
+    ``_collide_block``'s linked code again for the parallel wrapper)."""
     n_pairs = pairs.shape[0]
     for blk in prange(nb):
-        lo, hi = block_bounds(n_pairs, nb, blk)
         _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
-                       out, status, lo, hi)
+                       out, status, blk * n_pairs // nb, (blk + 1) * n_pairs // nb)
 
 
 def collide_batch(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,

@@ -38,6 +38,9 @@ _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX_1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX_2 = np.uint64(0x94D049BB133111EB)
 _ID_MASK = np.uint64(0x7FFFFFFFFFFFFFFF)
+# added to B's mixed hash in a pair's shard (pair_shards), a constant of its own so that
+# a pair's shard and its contacts' ids are not the same draw
+_SHARD_SALT = np.uint64(0x632BE59BD9B4E019)
 
 
 @njit_kernel
@@ -46,6 +49,23 @@ def _mix64(x):
     x = (x ^ (x >> np.uint64(30))) * _MIX_1
     x = (x ^ (x >> np.uint64(27))) * _MIX_2
     return x ^ (x >> np.uint64(31))
+
+
+@njit_kernel
+def pair_shards(body_hash, pairs, shard_count, out):
+    """Write into ``out`` int64 (P,) the shard (0 <= s < shard_count) of each pair of
+    ``pairs`` int64 (P, 2) (slots, A the lower), from the bodies' name hashes
+    ``body_hash`` uint64 (S,) (arbiters.body_hashes): a mix of the pair's two hashes,
+    modulo the count.  A pair's shard depends on its two names alone, so it never moves
+    while the scene runs and its arbiter stays on one shard; and the mix spreads the
+    pairs over the shards as a random draw would, so each shard gets an equal share of
+    every kind of pair, and of the cost, in expectation (a cost-weighted split would
+    have to move pairs as the scene changes)."""
+    count = np.uint64(shard_count)
+    for k in range(pairs.shape[0]):
+        ha = body_hash[pairs[k, 0]]
+        hb = body_hash[pairs[k, 1]]
+        out[k] = np.int64(_mix64(ha ^ _mix64(hb + _SHARD_SALT)) % count)
 
 
 @njit_kernel

@@ -16,7 +16,10 @@ One step runs, in order (each phase timed in ``StepResult.timings``, seconds):
                grown by half the reach, reach = max(contact_margin, proximity)
   broadphase   a hashed uniform grid: exactly the pairs whose grown AABBs overlap;
                planes against every body reaching their half-space; only bodies that
-               have a pose take part
+               have a pose take part.  Static-heavy scenes (STATIC_GRID_MIN): the static
+               bodies' grid is kept from step to step and queried with the other
+               bodies' boxes, which alone are boxed each step, so a step costs
+               O(moving bodies) and finds no static-static pair
   filter       drop static-static pairs, pairs failing the group/mask test
                ``(group_i & mask_j) and (group_j & mask_i)``, and the scene's allowed
                pairs (MoveIt's allowed-collision idea)
@@ -60,7 +63,8 @@ import numba
 import numpy as np
 
 from .arbiters import ArbiterSet, Events, body_hashes
-from .kernels.broadphase import filter_pairs, find_pairs, normalise_poses, world_aabbs
+from .kernels.broadphase import (filter_pairs, find_pairs, normalise_poses, poses_unchanged,
+                                 static_grid, static_pairs, world_aabbs)
 from .kernels.constants import (M_AUTO, METHOD_NAMES, OUT_DIST, OUT_METHOD, OUT_NORMAL,
                                 OUT_PA, OUT_PB, OUT_SIZE, ST_FAILED, ST_NOT_RUN,
                                 ST_SEPARATED, ST_TOUCHING)
@@ -80,6 +84,15 @@ PARALLEL_MIN_ITEMS = 256
 # milliseconds, and lose several times over when the other core is busy, as beside
 # other work in a robot; ``Pipeline.parallel_min_cheap_items`` lowers it
 PARALLEL_MIN_CHEAP_ITEMS = 200_000
+
+
+# The broad phase keeps a grid of the static bodies (kernels/broadphase.static_grid)
+# and queries it with the others' boxes (static_pairs) when at least this many bodies
+# are static and they outnumber the others, so that a step costs O(moving bodies):
+# static bodies are never boxed or gridded again while they keep their poses, and
+# static-static pairs are never found (bench/static_heavy.py).  Below it the one grid of
+# every body costs about the same.
+STATIC_GRID_MIN = 1000
 
 
 @contextlib.contextmanager
@@ -238,10 +251,24 @@ class StepResult(ContactSet):
 
 
 class Bounds(NamedTuple):
-    """World AABBs lo, hi float64 (S, 3) m and planes' grown half-spaces plane_w (S, 4)."""
+    """World AABBs lo, hi float64 (R, 3) m and planes' grown half-spaces plane_w (R, 4)
+    of the slots ``slots`` int64 (R,) increasing, or of every slot (None)."""
     lo: np.ndarray
     hi: np.ndarray
     plane_w: np.ndarray
+    slots: np.ndarray = None
+
+
+class StaticIndex(NamedTuple):
+    """The static bodies' grid (kernels/broadphase.static_grid), kept from step to step
+    while the scene, the reach and the static bodies' poses stay the same."""
+    key: tuple           # (scene version, reach)
+    slots: np.ndarray    # int64 (S,) the static non-plane slots that take part
+    pos: np.ndarray      # their positions and orientations when it was built
+    quat: np.ndarray
+    lo: np.ndarray       # their grown world AABBs
+    hi: np.ndarray
+    grid: tuple          # static_grid's (frame, keys, members, start, big)
 
 
 class NarrowPhase(NamedTuple):
@@ -299,10 +326,13 @@ class Pipeline:
         self.config = config
         self._method = METHOD_NAMES.index(config.method)
         self._order = np.empty(0, np.int64)
+        self._static = None
         self._buffers = {}
         # batches this long or longer use the threaded kernels (read at each step)
         self.parallel_min_items = PARALLEL_MIN_ITEMS
         self.parallel_min_cheap_items = PARALLEL_MIN_CHEAP_ITEMS
+        # at least this many static bodies, and more than the others: static grid
+        self.static_grid_min = STATIC_GRID_MIN
         self.arbiters = ArbiterSet(config.merge_distance, config.drift_threshold,
                                    config.max_contacts, config.stale_steps)
         self._pending = Events.empty()
@@ -456,29 +486,74 @@ class Pipeline:
 
     def _bounds(self, view):
         t = view.table
-        n = len(t.codes)
+        moving = self._moving_slots(view)
+        if moving is not None:
+            codes, params, vrange = t.codes[moving], t.params[moving], t.vrange[moving]
+            pos, quat = view.positions[moving], view.orientations[moving]
+        else:
+            codes, params, vrange = t.codes, t.params, t.vrange
+            pos, quat = view.positions, view.orientations
+        n = len(codes)
         lo = self._buffer("lo", (n, 3))[:n]
         hi = self._buffer("hi", (n, 3))[:n]
         plane_w = self._buffer("plane_w", (n, 4))[:n]
         with _threads(n, self.parallel_min_cheap_items):
-            world_aabbs(t.codes, t.params, t.vrange, t.verts, view.positions,
-                        view.orientations, 0.5 * self._reach(), lo, hi, plane_w)
-        return Bounds(lo, hi, plane_w)
+            world_aabbs(codes, params, vrange, t.verts, pos, quat, 0.5 * self._reach(), lo,
+                        hi, plane_w)
+        return Bounds(lo, hi, plane_w, moving)
+
+    def _moving_slots(self, view):
+        """The slots boxed every step when the static grid is used (the bodies with a
+        pose that are not static, and every plane), after bringing the static grid up
+        to date; None when it is not used (every slot is boxed)."""
+        slots = view.active if view.active is not None else np.arange(len(view.static))
+        fixed = view.static[slots] & ~self.scene.is_plane[slots]
+        n_fixed = int(np.count_nonzero(fixed))
+        if n_fixed < max(self.static_grid_min, 1) or 2 * n_fixed <= len(slots):
+            self._static = None
+            return None
+        self._static_grid(view, slots[fixed])
+        return slots[~fixed]
+
+    def _static_grid(self, view, slots):
+        key = (self.scene.version, self._reach())
+        old = self._static
+        if (old is not None and old.key == key and np.array_equal(old.slots, slots)
+                and poses_unchanged(slots, view.positions, view.orientations, old.pos,
+                                    old.quat)):
+            return
+        pos, quat = view.positions[slots], view.orientations[slots]
+        t = view.table
+        n = len(slots)
+        lo, hi, plane_w = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 4))
+        world_aabbs(t.codes[slots], t.params[slots], t.vrange[slots], t.verts, pos, quat,
+                    0.5 * self._reach(), lo, hi, plane_w)
+        self._static = StaticIndex(key, slots, pos, quat, lo, hi, static_grid(lo, hi))
 
     def _broad_phase(self, view, bounds):
-        """Candidate pairs int64 (P, 2) of slots, sorted, among the bodies with a pose."""
-        lo, hi, plane_w = bounds
-        is_plane = self.scene.is_plane
-        active = view.active
-        if active is not None:
-            lo, hi, plane_w, is_plane = lo[active], hi[active], plane_w[active], is_plane[active]
-        if len(lo) < 2:
-            return np.zeros((0, 2), np.int64)
-        with _threads(len(lo), self.parallel_min_cheap_items):
-            cand, self._order, _ = find_pairs(lo, hi, is_plane, plane_w, self._order, -1)
-        if active is not None:
-            cand = active[cand]      # increasing, so the rows stay sorted
-        return cand
+        """Candidate pairs int64 (P, 2) of slots, sorted, among the bodies with a pose
+        (with the static grid: without static-static pairs, which the filter drops)."""
+        lo, hi, plane_w, slots = bounds
+        if slots is None:
+            slots = view.active
+            if slots is not None:
+                lo, hi, plane_w = lo[slots], hi[slots], plane_w[slots]
+        is_plane = self.scene.is_plane if slots is None else self.scene.is_plane[slots]
+        cand = np.zeros((0, 2), np.int64)
+        if len(lo) >= 2:
+            with _threads(len(lo), self.parallel_min_cheap_items):
+                cand, self._order, _ = find_pairs(lo, hi, is_plane, plane_w, self._order, -1)
+            if slots is not None:
+                cand = slots[cand]      # increasing, so the rows stay sorted
+        if bounds.slots is None:
+            return cand
+        st = self._static
+        rows = np.flatnonzero(~is_plane)
+        found = static_pairs(np.ascontiguousarray(lo[rows]), np.ascontiguousarray(hi[rows]),
+                             st.lo, st.hi, *st.grid)
+        a, b = slots[rows[found[:, 0]]], st.slots[found[:, 1]]
+        cand = np.concatenate([cand, np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)])
+        return cand[np.lexsort((cand[:, 1], cand[:, 0]))]
 
     def _narrow_phase(self, view, pairs):
         t = view.table
@@ -609,3 +684,13 @@ class Pipeline:
         cluster.step(pos, quat, 0.0)
         pair_shards(body_hashes(["a", "b"]), np.array([[0, 1]]), np.int64(2),
                     np.empty(1, np.int64))
+        # a static-heavy scene: the static grid's kernels
+        shelf = {"type": "box", "size": [1.0, 1.0, 1.0]}
+        store = Pipeline([{"name": f"s{k}", "shape": shelf, "static": True} for k in range(3)]
+                         + [{"name": "bot", "shape": {"type": "sphere", "radius": 0.5}}],
+                         PipelineConfig(method=self.config.method))
+        store.static_grid_min = 1
+        pos = np.array([[0.0, 0.0, 0.0], [1.2, 0.0, 0.0], [0.0, 1.2, 0.0], [0.6, 0.0, 0.9]])
+        quat = np.tile([0.0, 0.0, 0.0, 1.0], (4, 1))
+        store.step(pos, quat, 0.0)
+        store.step(pos, quat, 0.0)

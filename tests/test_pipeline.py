@@ -445,3 +445,45 @@ def test_shard_settings_are_checked():
         PipelineConfig(shard_index=2, shard_count=2).validate()
     with pytest.raises(ValueError, match="shard_count must be an integer >= 1"):
         PipelineConfig(shard_count=0).validate()
+
+
+def test_static_grid_gives_the_full_grids_pairs_and_contacts():
+    """A static-heavy scene (a plane, a large static slab, static bodies, a few moving
+    and some without a pose) stepped with the static grid and with the one grid of
+    every body: the same pairs, contacts and ids after moves, a static body moved by a
+    pose update (the grid is rebuilt), a static body removed and one added."""
+    from bench.common import scene
+    bodies, pos, quat, _ = scene(1500, 0.5, seed=3)
+    rng = np.random.default_rng(3)
+    static = rng.uniform(size=len(bodies)) > 0.1
+    bodies = [dict(b, static=bool(s)) for b, s in zip(bodies, static)]
+    bodies += [{"name": "floor", "static": True,
+                "shape": {"type": "plane", "normal": [0, 0, 1], "offset": 1.0}},
+               {"name": "slab", "static": True, "shape": {"type": "box", "size": [30, 30, 0.2]}}]
+    pos = np.vstack([pos, [0, 0, 0], [4, 4, 4]])
+    quat = np.vstack([quat, [0, 0, 0, 1], [0, 0, 0, 1]])
+    grid, full = Pipeline(bodies), Pipeline(bodies)
+    full.static_grid_min = 10 ** 9
+    moving = np.flatnonzero(~np.r_[static, True, True])
+    for k in range(4):
+        pos = pos.copy()
+        pos[moving] += rng.uniform(-0.02, 0.02, (len(moving), 3))
+        if k == 2:
+            pos[np.flatnonzero(static)[:50]] += 0.3          # static bodies moved
+        ra, rb = grid.step(pos, quat, 0.1 * k), full.step(pos, quat, 0.1 * k)
+        assert grid._static is not None and full._static is None
+        assert len(ra.pairs) > 50
+        assert np.array_equal(ra.pairs, rb.pairs)
+        assert ra.n_candidate_pairs < rb.n_candidate_pairs      # no static-static pairs
+        ca, cb = grid.arbiters.contacts(), full.arbiters.contacts()
+        assert len(ca["contact_id"]) > 50
+        assert np.array_equal(ca["contact_id"], cb["contact_id"])
+        assert np.array_equal(ca["point_a"], cb["point_a"])
+    for p in (grid, full):
+        p.scene.remove_body(bodies[int(np.flatnonzero(static)[0])]["name"])
+        p.scene.add_body({"name": "crate", "static": True, "pose": [pos[moving[0]].tolist(),
+                                                                    [0, 0, 0, 1]],
+                          "shape": {"type": "box", "size": [1, 1, 1]}})
+    ra, rb = grid.step(), full.step()
+    assert np.array_equal(ra.pairs, rb.pairs)
+    assert any("crate" in (grid.scene.names[a], grid.scene.names[b]) for a, b in ra.pairs)

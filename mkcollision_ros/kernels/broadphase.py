@@ -47,6 +47,9 @@ from .constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, NO_DIRECTION, P
                         PLANE_AXIS_TOL, P_MARGIN, SPHERE)
 from .jit import njit_kernel, njit_parallel, prange, run_blocks
 
+# a static_grid of at most this many cells gets a table of each cell's entries (8 bytes
+# a cell), larger ones are searched by bisection
+STATIC_DENSE_CELLS = 1 << 22
 # fewest bodies per block of world_aabbs (jit.n_blocks)
 AABB_CHUNK = 1024
 # grid cell edge = this x the mean largest AABB extent of the bodies (dimensionless)
@@ -506,6 +509,205 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
         pairs[t, 0] = keys[t] // n
         pairs[t, 1] = keys[t] % n
     return pairs, new_order, np.int64(0)
+
+
+@njit_kernel
+def static_grid(lo, hi):
+    """A grid of static bodies, built once and queried every step (static_pairs).
+
+    lo, hi float64 (S, 3): the static bodies' world AABBs (m; no planes: find_pairs
+    pairs a plane with every body).  Cell edge GRID_CELL_SCALE x their mean largest
+    extent (grown so that no axis has more than GRID_MAX_CELLS cells), origin at their
+    lowest corner; a body spanning more than GRID_BIG_CELLS cells is left out of the
+    cells and listed in ``big``.
+    Returns (frame float64 (7,) = origin (3), cell edge, cells per axis (3),
+             keys int64 (E,) the sorted cell numbers ((x ny + y) nz + z) of every
+             (cell, body) entry, members int64 (E,) the entries' body rows,
+             start int64 (C + 1,): the entries of cell c are [start[c], start[c + 1]),
+             when the grid has C <= STATIC_DENSE_CELLS cells, else empty (a cell's
+             entries are then found by bisection in ``keys``), big int64 (B,) rows)."""
+    n = lo.shape[0]
+    frame = np.zeros(7)
+    origin = np.full(3, np.inf)
+    top = np.full(3, -np.inf)
+    ext = 0.0
+    for i in range(n):
+        e = 0.0
+        for k in range(3):
+            origin[k] = min(origin[k], lo[i, k])
+            top[k] = max(top[k], hi[i, k])
+            e = max(e, hi[i, k] - lo[i, k])
+        ext += e
+    h = GRID_CELL_SCALE * ext / max(n, 1)
+    span = 0.0
+    for k in range(3):
+        if n == 0:
+            origin[k] = 0.0
+            top[k] = 0.0
+        span = max(span, top[k] - origin[k])
+    if not h > 0.0:
+        h = 1.0
+    if span / h > GRID_MAX_CELLS - 1:
+        h = span / (GRID_MAX_CELLS - 1)
+    for k in range(3):
+        frame[k] = origin[k]
+        frame[4 + k] = math.floor((top[k] - origin[k]) / h) + 1
+    frame[3] = h
+    count = np.zeros(n, np.int64)
+    n_big = 0
+    for i in range(n):
+        c = 1
+        for k in range(3):
+            c *= (int(math.floor((hi[i, k] - origin[k]) / h))
+                  - int(math.floor((lo[i, k] - origin[k]) / h)) + 1)
+        if c > GRID_BIG_CELLS:
+            n_big += 1
+        else:
+            count[i] = c
+    keys = np.empty(count.sum(), np.int64)
+    members = np.empty(keys.shape[0], np.int64)
+    big = np.empty(n_big, np.int64)
+    e = 0
+    b = 0
+    for i in range(n):
+        if count[i] == 0:
+            big[b] = i
+            b += 1
+            continue
+        x0 = int(math.floor((lo[i, 0] - origin[0]) / h))
+        y0 = int(math.floor((lo[i, 1] - origin[1]) / h))
+        z0 = int(math.floor((lo[i, 2] - origin[2]) / h))
+        x1 = int(math.floor((hi[i, 0] - origin[0]) / h))
+        y1 = int(math.floor((hi[i, 1] - origin[1]) / h))
+        z1 = int(math.floor((hi[i, 2] - origin[2]) / h))
+        for x in range(x0, x1 + 1):
+            for y in range(y0, y1 + 1):
+                for z in range(z0, z1 + 1):
+                    keys[e] = _cell_number(x, y, z, frame)
+                    members[e] = i
+                    e += 1
+    order = np.argsort(keys, kind="mergesort")
+    keys, members = keys[order], members[order]
+    cells = 1.0
+    for k in range(3):
+        cells *= frame[4 + k]
+    start = np.zeros(0, np.int64)
+    if cells <= STATIC_DENSE_CELLS:
+        start = np.searchsorted(keys, np.arange(int(cells) + 1))
+    return frame, keys, members, start, big
+
+
+@njit_kernel
+def _cell_number(x, y, z, frame):
+    """The number (x ny + y) nz + z of the cell (x, y, z) of a static_grid."""
+    return (x * np.int64(frame[5]) + y) * np.int64(frame[6]) + z
+
+
+@njit_kernel
+def _cell_of(x, origin, h, top):
+    """The cell coordinate of x along one axis of a static_grid, clamped to [0, top]."""
+    c = int(math.floor((x - origin) / h))
+    return min(max(c, 0), top)
+
+
+@njit_kernel
+def static_pairs(lo_m, hi_m, lo_s, hi_s, frame, keys, members, start, big):
+    """The overlapping pairs of moving and static bodies: row (m, s) for every moving
+    body m (AABBs lo_m, hi_m (M, 3)) and static body s (lo_s, hi_s (S, 3), indexed by the
+    static_grid ``frame, keys, members, big``) whose closed AABBs overlap on all three
+    axes, each pair once (found in the cell holding max(lo_m, lo_s), as find_pairs),
+    sorted by m then s.  Costs O(M) grid cells and their entries, not O(S); a moving
+    body over more than GRID_BIG_CELLS cells is tested against every static body."""
+    h = frame[3]
+    tx, ty, tz = int(frame[4]) - 1, int(frame[5]) - 1, int(frame[6]) - 1
+    count = np.zeros(lo_m.shape[0] + 1, np.int64)
+    for sweep in range(2):
+        if sweep == 1:
+            for m in range(lo_m.shape[0]):
+                count[m + 1] += count[m]
+            out = np.empty((count[-1], 2), np.int64)
+        else:
+            out = np.empty((0, 2), np.int64)
+        for m in range(lo_m.shape[0]):
+            w = count[m]
+            outside = False
+            for k in range(3):
+                if hi_m[m, k] < frame[k] or lo_m[m, k] > frame[k] + (frame[4 + k]) * h:
+                    outside = True
+            found = 0
+            x0 = _cell_of(lo_m[m, 0], frame[0], h, tx)
+            y0 = _cell_of(lo_m[m, 1], frame[1], h, ty)
+            z0 = _cell_of(lo_m[m, 2], frame[2], h, tz)
+            x1 = _cell_of(hi_m[m, 0], frame[0], h, tx)
+            y1 = _cell_of(hi_m[m, 1], frame[1], h, ty)
+            z1 = _cell_of(hi_m[m, 2], frame[2], h, tz)
+            # a body over many cells is tested against every static body instead
+            brute = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1) > GRID_BIG_CELLS
+            if not outside and not brute:
+                for x in range(x0, x1 + 1):
+                    for y in range(y0, y1 + 1):
+                        for z in range(z0, z1 + 1):
+                            key = _cell_number(x, y, z, frame)
+                            if start.shape[0]:
+                                e, last = start[key], start[key + 1]
+                            else:
+                                e = np.searchsorted(keys, key)
+                                last = e
+                                while last < keys.shape[0] and keys[last] == key:
+                                    last += 1
+                            while e < last:
+                                s = members[e]
+                                e += 1
+                                if (lo_m[m, 0] > hi_s[s, 0] or lo_s[s, 0] > hi_m[m, 0]
+                                        or lo_m[m, 1] > hi_s[s, 1] or lo_s[s, 1] > hi_m[m, 1]
+                                        or lo_m[m, 2] > hi_s[s, 2] or lo_s[s, 2] > hi_m[m, 2]):
+                                    continue
+                                # the one cell of the pair: that of the corner max(lo)
+                                if (_cell_of(max(lo_m[m, 0], lo_s[s, 0]), frame[0], h, tx) != x
+                                        or _cell_of(max(lo_m[m, 1], lo_s[s, 1]), frame[1], h,
+                                                    ty) != y
+                                        or _cell_of(max(lo_m[m, 2], lo_s[s, 2]), frame[2], h,
+                                                    tz) != z):
+                                    continue
+                                if sweep == 1:
+                                    out[w + found, 0] = m
+                                    out[w + found, 1] = s
+                                found += 1
+            for q in range(lo_s.shape[0] if brute else big.shape[0]):
+                s = q if brute else big[q]
+                if outside:
+                    break
+                if (lo_m[m, 0] > hi_s[s, 0] or lo_s[s, 0] > hi_m[m, 0]
+                        or lo_m[m, 1] > hi_s[s, 1] or lo_s[s, 1] > hi_m[m, 1]
+                        or lo_m[m, 2] > hi_s[s, 2] or lo_s[s, 2] > hi_m[m, 2]):
+                    continue
+                if sweep == 1:
+                    out[w + found, 0] = m
+                    out[w + found, 1] = s
+                found += 1
+            if sweep == 0:
+                count[m + 1] = found
+            else:
+                # the statics of m in increasing order
+                rows = out[w:w + found, 1]
+                rows.sort()
+    return out
+
+
+@njit_kernel
+def poses_unchanged(slots, pos_w, quat_w, old_pos, old_quat):
+    """Whether the rows ``slots`` int64 (K,) of pos_w (S, 3) and quat_w (S, 4) equal
+    old_pos (K, 3) and old_quat (K, 4) exactly (the static grid's check that its bodies
+    kept their poses: no copy of the rows, and it stops at the first change)."""
+    for r in range(slots.shape[0]):
+        i = slots[r]
+        for k in range(3):
+            if pos_w[i, k] != old_pos[r, k]:
+                return False
+        for k in range(4):
+            if quat_w[i, k] != old_quat[r, k]:
+                return False
+    return True
 
 
 @njit_kernel

@@ -304,6 +304,35 @@ def _plane_par(planes, bodies, lo, hi, plane_w, hit):
 
 
 @njit_kernel
+def _grid_extent(lo, hi, rows):
+    """The frame of a grid over the boxes ``rows`` int64 of lo, hi (N, 3): their lowest
+    and highest corners (zeros without rows), a cell edge of GRID_CELL_SCALE x their
+    mean largest extent (1 for points) and the largest side of their union.  Returns
+    (origin (3,), top (3,), edge, span)."""
+    origin = np.full(3, np.inf)
+    top = np.full(3, -np.inf)
+    ext = 0.0
+    for r in range(rows.shape[0]):
+        i = rows[r]
+        e = 0.0
+        for k in range(3):
+            origin[k] = min(origin[k], lo[i, k])
+            top[k] = max(top[k], hi[i, k])
+            e = max(e, hi[i, k] - lo[i, k])
+        ext += e
+    h = GRID_CELL_SCALE * ext / max(rows.shape[0], 1)
+    span = 0.0
+    for k in range(3):
+        if rows.shape[0] == 0:
+            origin[k] = 0.0
+            top[k] = 0.0
+        span = max(span, top[k] - origin[k])
+    if not h > 0.0:
+        h = 1.0
+    return origin, top, h, span
+
+
+@njit_kernel
 def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     """Overlapping AABB pairs.
 
@@ -334,23 +363,7 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
             a += 1
     m = bodies.shape[0]
     # --- the grid: cell size from the mean largest extent, origin at the lowest corner
-    origin = np.full(3, np.inf)
-    top = np.full(3, -np.inf)
-    ext = 0.0
-    for r in range(m):
-        i = bodies[r]
-        e = 0.0
-        for k in range(3):
-            origin[k] = min(origin[k], lo[i, k])
-            top[k] = max(top[k], hi[i, k])
-            e = max(e, hi[i, k] - lo[i, k])
-        ext += e
-    h = GRID_CELL_SCALE * ext / max(m, 1)
-    span = 0.0
-    for k in range(3):
-        span = max(span, top[k] - origin[k])
-    if not h > 0.0:
-        h = 1.0
+    origin, top, h, span = _grid_extent(lo, hi, bodies)
     if span / h > GRID_MAX_CELLS:
         h = span / GRID_MAX_CELLS
     cmin = np.empty((m, 3), np.int64)
@@ -528,25 +541,7 @@ def static_grid(lo, hi):
              entries are then found by bisection in ``keys``), big int64 (B,) rows)."""
     n = lo.shape[0]
     frame = np.zeros(7)
-    origin = np.full(3, np.inf)
-    top = np.full(3, -np.inf)
-    ext = 0.0
-    for i in range(n):
-        e = 0.0
-        for k in range(3):
-            origin[k] = min(origin[k], lo[i, k])
-            top[k] = max(top[k], hi[i, k])
-            e = max(e, hi[i, k] - lo[i, k])
-        ext += e
-    h = GRID_CELL_SCALE * ext / max(n, 1)
-    span = 0.0
-    for k in range(3):
-        if n == 0:
-            origin[k] = 0.0
-            top[k] = 0.0
-        span = max(span, top[k] - origin[k])
-    if not h > 0.0:
-        h = 1.0
+    origin, top, h, span = _grid_extent(lo, hi, np.arange(n))
     if span / h > GRID_MAX_CELLS - 1:
         h = span / (GRID_MAX_CELLS - 1)
     for k in range(3):

@@ -121,6 +121,15 @@ def approx_mesh(shape, n_around=32):
     raise ValueError(shape["type"])
 
 
+def print_table(head, rows):
+    """Print a markdown table: the header cells ``head``, then one row of str cells per
+    item of ``rows``."""
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for r in rows:
+        print("| " + " | ".join(r) + " |")
+
+
 def timed(fn, repeat, inner=1):
     """Median seconds per call of fn() over ``repeat`` runs of ``inner`` calls."""
     ts = []

@@ -38,7 +38,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 50)
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
-from bench.common import scene  # noqa: E402
+from bench.common import print_table, scene  # noqa: E402
 
 PUBLISHER = r"""
 import sys, time
@@ -179,10 +179,7 @@ def main():
                     print("  done", rows[-1][:5], file=sys.stderr, flush=True)
     head = ["bodies", "rate Hz", "input", "markers", "shards", "published", "answered",
             "unanswered", "p50 ms", "p99 ms", "max ms", "node CPU"]
-    print("| " + " | ".join(head) + " |")
-    print("|" + "---|" * len(head))
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+    print_table(head, rows)
 
 
 if __name__ == "__main__":

@@ -49,7 +49,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from bench.common import (coal_geometry, coal_transform, fcl_geometry,  # noqa: E402
+from bench.common import (coal_geometry, coal_transform, fcl_geometry, print_table,  # noqa: E402
                           fcl_transform, move, mujoco_assets_xml, mujoco_geom,
                           pybullet_shape, scene, wxyz)
 from mkcollision_ros.pipeline import Pipeline, PipelineConfig  # noqa: E402
@@ -243,12 +243,12 @@ def bench(sizes, densities, steps, seed, engines, skip_slow_above):
     head = ["bodies", "density", "cube edge m", "touching pairs", "pairs/body",
             "broad-phase pairs", "narrow-phase pairs", "total", "collision",
             "bounds", "broadphase", "filter", "narrowphase", "manifold", "arbiters"]
-    _table(head, phase_rows)
+    print_table(head, phase_rows)
     print("\n### Peers, median ms per step (same poses)\n")
     head = ["bodies", "density", "engine", "pose upload", "collide", "total",
             "touching pairs", "diff vs ours (+theirs only / -ours only)",
             "our total / their total", "our collision / their collide"]
-    _table(head, peer_rows)
+    print_table(head, peer_rows)
     print("\n### Growth with body count (log-log slope of ms/step over the sizes run)\n")
     head = ["density", "engine", "slope total", "slope collision / collide"]
     rows = []
@@ -261,7 +261,7 @@ def bench(sizes, densities, steps, seed, engines, skip_slow_above):
             rows.append([f"{density:g}", name,
                          f"{np.polyfit(ns, np.log([p[1] for p in pts]), 1)[0]:.2f}",
                          f"{np.polyfit(ns, np.log([p[2] for p in pts]), 1)[0]:.2f}"])
-    _table(head, rows)
+    print_table(head, rows)
     if len(densities) > 1:
         print("\n### Growth with contact count (time at the highest density / lowest, "
               "same body count)\n")
@@ -274,7 +274,7 @@ def bench(sizes, densities, steps, seed, engines, skip_slow_above):
                 if a and b:
                     rows.append([str(n), name, f"{b[0][5] / max(a[0][5], 1):.1f}",
                                  f"{b[0][3] / a[0][3]:.2f}", f"{b[0][4] / a[0][4]:.2f}"])
-        _table(["bodies", "engine", "pairs ratio", "total ratio",
+        print_table(["bodies", "engine", "pairs ratio", "total ratio",
                 "collision / collide ratio"], rows)
 
 
@@ -328,17 +328,10 @@ def bench_scene_ops(sizes, steps, seed):
                 contact_margin=0.001 + 1e-4 * (k % 2))))
         edit_rows.append([str(n)] + [_ms(float(np.median(v))) for v in ops.values()])
     print("\n### Proximity pairs, our pipeline, median ms per step (density 0.2)\n")
-    _table(["bodies", "proximity m", "proximity pairs", "total", "narrowphase",
+    print_table(["bodies", "proximity m", "proximity pairs", "total", "narrowphase",
             "classify"], prox_rows)
     print("\n### One scene edit, median ms\n")
-    _table(["bodies"] + list(ops), edit_rows)
-
-
-def _table(head, rows):
-    print("| " + " | ".join(head) + " |")
-    print("|" + "---|" * len(head))
-    for r in rows:
-        print("| " + " | ".join(r) + " |")
+    print_table(["bodies"] + list(ops), edit_rows)
 
 
 def main():

@@ -27,7 +27,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from bench.common import move, mujoco_assets_xml, mujoco_geom, scene, wxyz  # noqa: E402
+from bench.common import (move, mujoco_assets_xml, mujoco_geom, print_table, scene,  # noqa: E402
+                          wxyz)
 from mkcollision_ros.pipeline import Pipeline, PipelineConfig  # noqa: E402
 
 PHASES = ("edits", "bounds", "broadphase", "filter", "narrowphase", "classify", "manifold",
@@ -147,10 +148,7 @@ def main():
             print(f"  done n={n} moving={len(moving)}", file=sys.stderr, flush=True)
     print(f"## Static-heavy scenes: density {args.density:g}, {args.steps} timed steps "
           "(median ms per step)\n")
-    print("| " + " | ".join(head) + " |")
-    print("|" + "---|" * len(head))
-    for cells in lines:
-        print("| " + " | ".join(cells) + " |")
+    print_table(head, lines)
 
 
 if __name__ == "__main__":

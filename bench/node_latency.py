@@ -11,8 +11,10 @@ For each case (bodies, rate, input message, markers on or off):
     once the message is built, just before it is published, as ``BodyPoseArray`` or
     ``geometry_msgs/PoseArray`` (a Python publisher builds a 1,000-pose PoseArray in
     ~5 ms, so it may fall short of the rate: "published" says how many it sent);
-  - here, a subscriber timing each ``contacts`` message against its stamp
-    (latency = receive wall time - stamp).
+  - here, a subscriber on rclpy's EventsExecutor timing each ``contacts`` message
+    against its stamp (latency = receive wall time - stamp).
+All three take the package's Fast DDS profile (config/fastdds_large_messages.xml), as
+the README asks of a large scene's publisher.
 Reported: messages published from the first one the node answered on (the ones before
 were lost to discovery), how many of those were answered (distinct stamps), the
 unanswered share, latency p50 / p99 / max (ms) over the answered ones after the first
@@ -22,7 +24,7 @@ the scene (shard_index 0 and 1 of shard_count 2): a stamp is answered once both 
 messages arrived, its latency that of the later one, and the CPU is the two nodes'.
 
     . tools/env.sh && python bench/node_latency.py [--bodies 100 1000] [--seconds 10]
-        [--shards 1 2]
+        [--shards 1 2] [--executors events single_threaded]
 """
 import argparse
 import os
@@ -39,6 +41,11 @@ os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 50)
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 from bench.common import print_table, scene  # noqa: E402
+from mkcollision_ros.node import use_large_messages_profile  # noqa: E402
+
+# every process here (this subscriber, the publisher, the nodes) takes the package's
+# Fast DDS profile, as the README asks of a large scene's publisher
+use_large_messages_profile()
 
 PUBLISHER = r"""
 import sys, time
@@ -79,7 +86,7 @@ rclpy.shutdown()
 """
 
 
-def params_file(n, markers, path):
+def params_file(n, markers, path, executor="events"):
     bodies, _, _, _ = scene(n, 0.2)
     block = {"names": [b["name"] for b in bodies]}
     for b in bodies:
@@ -89,6 +96,7 @@ def params_file(n, markers, path):
         block[b["name"]] = shape
     doc = {"/**": {"ros__parameters": {
         "trigger": "on_message", "publish_markers": markers, "warn_throttle_s": 10.0,
+        "executor": executor,
         "max_pose_age_s": 10.0, "bodies": block}}}
     with open(path, "w") as f:
         yaml.safe_dump(doc, f)
@@ -100,14 +108,15 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run_case(n, rate, kind, markers, seconds, shards=1):
+def run_case(n, rate, kind, markers, seconds, shards=1, executor="events"):
     import rclpy
     from mkcollision_msgs.msg import ContactArray
+    from rclpy.experimental import EventsExecutor
     from mkcollision_ros.demo import die_with_parent, node_executable
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "params.yaml")
-        params_file(n, markers, path)
+        params_file(n, markers, path, executor)
         shard_args = [[] if shards == 1 else
                       ["-r", f"__node:=collision_node_{k}", "-p", f"shard_index:={k}",
                        "-p", f"shard_count:={shards}"] for k in range(shards)]
@@ -135,11 +144,14 @@ def run_case(n, rate, kind, markers, seconds, shards=1):
         pub = subprocess.Popen([sys.executable, "-c", PUBLISHER, root, str(n), str(rate),
                                 str(seconds), kind], stdout=subprocess.PIPE, text=True)
         c0, w0 = sum(cpu_seconds(node.pid) for node in nodes), time.time()
+        executor = EventsExecutor()
+        executor.add_node(sub)
         while pub.poll() is None:
-            rclpy.spin_once(sub, timeout_sec=0.01)
+            executor.spin_once(timeout_sec=0.01)
         end = time.time() + 1.0
         while time.time() < end:
-            rclpy.spin_once(sub, timeout_sec=0.01)
+            executor.spin_once(timeout_sec=0.01)
+        executor.remove_node(sub)
         cpu = (sum(cpu_seconds(node.pid) for node in nodes) - c0) / (time.time() - w0)
         sent = [float(x) for x in pub.stdout.read().split()]
         sub.destroy_node()
@@ -152,7 +164,7 @@ def run_case(n, rate, kind, markers, seconds, shards=1):
     # messages sent once the node had answered one (before that: discovery)
     published = [s for s in sent if stamps and s >= stamps[0]]
     answered = set(stamps) & set(published)
-    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(shards),
+    return [str(n), f"{rate:g}", kind, "on" if markers else "off", str(shards), executor,
             str(len(published)),
             str(len(answered)), f"{1 - len(answered) / max(len(published), 1):.1%}",
             f"{1e3 * np.percentile(lat, 50):.2f}", f"{1e3 * np.percentile(lat, 99):.2f}",
@@ -168,17 +180,21 @@ def main():
     ap.add_argument("--markers", nargs="+", default=["off", "on"])
     ap.add_argument("--shards", type=int, nargs="+", default=[1],
                     help="node processes sharing the scene's pairs, one case each")
+    ap.add_argument("--executors", nargs="+", default=["events"],
+                    choices=["events", "single_threaded"],
+                    help="the nodes' executor parameter, one case each")
     args = ap.parse_args()
     rows = []
     for n in args.bodies:
         for kind in args.inputs:
             for markers in args.markers:
                 for shards in args.shards:
-                    rows.append(run_case(n, args.rate, kind, markers == "on", args.seconds,
-                                         shards))
-                    print("  done", rows[-1][:5], file=sys.stderr, flush=True)
-    head = ["bodies", "rate Hz", "input", "markers", "shards", "published", "answered",
-            "unanswered", "p50 ms", "p99 ms", "max ms", "node CPU"]
+                    for executor in args.executors:
+                        rows.append(run_case(n, args.rate, kind, markers == "on",
+                                             args.seconds, shards, executor))
+                        print("  done", rows[-1][:6], file=sys.stderr, flush=True)
+    head = ["bodies", "rate Hz", "input", "markers", "shards", "executor", "published",
+            "answered", "unanswered", "p50 ms", "p99 ms", "max ms", "node CPU"]
     print_table(head, rows)
 
 

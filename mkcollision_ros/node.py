@@ -55,6 +55,34 @@ import os
 # its threads; a user's own setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
+# Fast DDS's shared-memory segment is 0.5 MB, so the pose and contact messages of large
+# scenes (BodyPoseArray of ~8,000 bodies, ContactArray of ~4,000 contacts) would go over
+# UDP in fragments and be lost whole on a busy machine.  The node's participant takes
+# the package's profile with a 16 MB segment (config/fastdds_large_messages.xml) unless
+# the user names a profile file; read by Fast DDS at rclpy.init, so set at import.
+LARGE_MESSAGES_PROFILE = os.path.join("config", "fastdds_large_messages.xml")
+
+
+def use_large_messages_profile():
+    """Point Fast DDS at the package's large-messages profile, unless another RMW is
+    chosen or a profile file is already named.  Returns the profile's path, or None."""
+    if os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp") not in ("", "rmw_fastrtps_cpp"):
+        return None
+    if os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE") or os.environ.get(
+            "FASTDDS_DEFAULT_PROFILES_FILE"):
+        return None
+    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
+    try:
+        path = os.path.join(get_package_share_directory("mkcollision_ros"),
+                            LARGE_MESSAGES_PROFILE)
+    except PackageNotFoundError:
+        return None
+    if not os.path.isfile(path):
+        return None
+    os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] = path
+    return path
+
+
 import collections  # noqa: E402
 import math
 import time
@@ -69,7 +97,7 @@ from mkcollision_msgs.msg import (BodyPoseArray, ContactArray, ContactEvents,
 from mkcollision_msgs.msg import Scene as SceneMsg
 from mkcollision_msgs.srv import CheckCollision, EditScene
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -705,8 +733,26 @@ class CollisionNode(Node):
         return contacts, missing
 
 
+def spin(node):
+    """Run ``node``'s callbacks until the context shuts down, on the executor its
+    ``executor`` parameter names.  spin_once in a loop rather than spin(): the
+    EventsExecutor's spin() does not return when a SIGTERM shuts the context down."""
+    if node.cfg["executor"] == "events":
+        from rclpy.experimental import EventsExecutor
+        executor = EventsExecutor()
+    else:
+        executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.2)
+    finally:
+        executor.remove_node(node)
+
+
 def main(args=None):
     log = rclpy.logging.get_logger("collision_node")
+    use_large_messages_profile()
     try:
         rclpy.init(args=args)
     except Exception as err:  # noqa: BLE001 - e.g. a missing or unparsable params file
@@ -726,7 +772,7 @@ def main(args=None):
             log.fatal(f"invalid configuration: {type(err).__name__}: {err}")
             return 1
         try:
-            rclpy.spin(node)
+            spin(node)
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         except Exception as err:  # noqa: BLE001

@@ -75,10 +75,10 @@ def start_node(params_file, *ros_args):
                             start_new_session=True, preexec_fn=die_with_parent)
 
 
-def stop(proc):
-    """SIGINT the node's process group (SIGKILL after 20 s); return its output."""
+def stop(proc, sig=signal.SIGINT):
+    """Send ``sig`` to the node's process group (SIGKILL after 20 s); return its output."""
     if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
+        os.killpg(proc.pid, sig)
         try:
             proc.wait(timeout=20)
         except subprocess.TimeoutExpired:

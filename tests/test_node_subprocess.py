@@ -29,11 +29,16 @@ def test_installed_executable_and_config_are_where_ros2_run_looks():
     assert get_resource("packages", "mkcollision_ros") is not None
 
 
-def test_executable_with_config_file_answers_poses():
+@pytest.mark.parametrize("executor, sig", [("events", signal.SIGINT),
+                                           ("events", signal.SIGTERM),
+                                           ("single_threaded", signal.SIGTERM)])
+def test_executable_with_config_file_answers_poses(executor, sig):
+    """Each executor answers, and the node exits cleanly on Ctrl-C and on SIGTERM (what
+    launch and systemd send)."""
     params_file = default_params_file()
     bodies = bodies_from_params(load_params_file(params_file))
     radius = {b["name"]: b["shape"].get("radius") for b in bodies}
-    proc = start_node(params_file)
+    proc = start_node(params_file, "-p", f"executor:={executor}")
     h = RosHarness()
     try:
         probe = h.node("probe")
@@ -60,7 +65,7 @@ def test_executable_with_config_file_answers_poses():
         assert tuple(m.normals) == pytest.approx((0.0, 1.0, 0.0), abs=1e-9)
     finally:
         h.close()
-        log = stop(proc)
+        log = stop(proc, sig)
     assert proc.returncode == 0, log
 
 
@@ -157,3 +162,37 @@ def test_node_started_by_demo_dies_with_its_parent():
     if alive:
         os.killpg(child, signal.SIGKILL)
     assert not alive, "the node outlived its parent"
+
+
+def test_large_messages_profile_is_taken_unless_the_user_names_one(monkeypatch):
+    """The node points Fast DDS at the installed profile, whose shared-memory segment
+    holds a 10,000-body BodyPoseArray; a user's own profile or another RMW is left alone."""
+    import xml.etree.ElementTree as ET
+    from mkcollision_ros.node import use_large_messages_profile
+    for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE",
+                "RMW_IMPLEMENTATION"):
+        monkeypatch.delenv(var, raising=False)
+    path = use_large_messages_profile()
+    assert path is not None and os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] == path
+    assert path.endswith(os.path.join("share", "mkcollision_ros", "config",
+                                      "fastdds_large_messages.xml"))
+    ns = {"p": "http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles"}
+    root = ET.parse(path).getroot()
+    shm = [d for d in root.iterfind("p:transport_descriptors/p:transport_descriptor", ns)
+           if d.findtext("p:type", namespaces=ns) == "SHM"]
+    assert len(shm) == 1
+    one_message = 10_000 * (7 * 8 + 4 + len("body_00000") + 1) + 1024
+    assert int(shm[0].findtext("p:segment_size", namespaces=ns)) >= 4 * one_message
+    # the participant keeps UDP too (shards on several machines)
+    used = [t.text for t in root.iterfind("p:participant/p:rtps/p:userTransports/"
+                                          "p:transport_id", ns)]
+    kinds = {d.findtext("p:transport_id", namespaces=ns): d.findtext("p:type", namespaces=ns)
+             for d in root.iterfind("p:transport_descriptors/p:transport_descriptor", ns)}
+    assert sorted(kinds[t] for t in used) == ["SHM", "UDPv4"]
+    monkeypatch.setenv("FASTRTPS_DEFAULT_PROFILES_FILE", "/my/profile.xml")
+    assert use_large_messages_profile() is None
+    assert os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] == "/my/profile.xml"
+    monkeypatch.delenv("FASTRTPS_DEFAULT_PROFILES_FILE")
+    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_cyclonedds_cpp")
+    assert use_large_messages_profile() is None
+    assert "FASTRTPS_DEFAULT_PROFILES_FILE" not in os.environ

@@ -75,7 +75,7 @@ fi
 # sources, so numba's on-disk cache is shared by the tests, the demo and `ros2 run`.
 src_hash="$(cat package.xml setup.py setup.cfg interfaces/mkcollision_msgs/package.xml \
   interfaces/mkcollision_msgs/CMakeLists.txt interfaces/mkcollision_msgs/msg/* \
-  interfaces/mkcollision_msgs/srv/* config/*.yaml | sha256sum | cut -d' ' -f1)"
+  interfaces/mkcollision_msgs/srv/* config/*.yaml config/*.xml | sha256sum | cut -d' ' -f1)"
 if [ "$(cat install/.mkcollision-src 2>/dev/null)" != "$src_hash" ]; then
   log "building with colcon"
   mkdir -p log

@@ -45,7 +45,7 @@ from numba.core import event
 EXPECTED_SECONDS = {
     "normalise_poses": 0,
     "_world_aabbs_block": 1,
-    "find_pairs": 11,
+    "find_pairs": 14,
     "filter_pairs": 1,
     "_collide_block": 181,
     "_collide_batch": 26,

@@ -115,8 +115,12 @@ def test_plane_aabb_and_grow():
     (1, "random", 0), (2, "random", 1), (7, "random", 2), (60, "random", 3),
     (500, "random", 4), (3000, "random", 5), (10000, "random", 6),
     (300, "stacked", 7), (2000, "line", 8), (400, "grid_touching", 9),
+    (800, "far_clusters", 10), (600, "slabs", 11),
 ])
 def test_find_pairs_matches_brute_force(n, layout, seed):
+    """Both grids against brute force: the dense one (every layout but far clusters,
+    whose table would be too large: the hashed grid), with big bodies (slabs) tested
+    against every body."""
     rng = np.random.default_rng(seed)
     shapes = random_shapes(rng, n, plane_every=0 if n > 3000 else 97)
     t = build_table(shapes)
@@ -129,6 +133,14 @@ def test_find_pairs_matches_brute_force(n, layout, seed):
     elif layout == "line":
         pos = np.zeros((n, 3))
         pos[:, 0] = np.arange(n) * 0.37
+    elif layout == "far_clusters":          # two dense clusters 1.7 km apart
+        pos = rng.uniform(-3.0, 3.0, size=(n, 3))
+        pos[n // 2:] += 1000.0
+    elif layout == "slabs":                 # small boxes among a few 8 m slabs
+        shapes = [{"type": "box", "size": [8.0, 8.0, 0.2] if k % 100 == 0 else
+                   [0.4, 0.3, 0.5]} for k in range(n)]
+        t = build_table(shapes)
+        pos = rng.uniform(-4.0, 4.0, size=(n, 3))
     else:  # boxes of side 1 on an integer grid: faces touch exactly (closed intervals)
         shapes = [{"type": "box", "size": [1.0, 1.0, 1.0]} for _ in range(n)]
         t = build_table(shapes)
@@ -139,7 +151,8 @@ def test_find_pairs_matches_brute_force(n, layout, seed):
         quat = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
     is_plane = t.codes == PLANE
     lo, hi, pw = aabbs(t, pos, quat, grow=0.01)
-    pairs, order, axis = find_pairs(lo, hi, is_plane, pw, np.empty(0, np.int64), -1)
+    pairs, order, kind = find_pairs(lo, hi, is_plane, pw, np.empty(0, np.int64), -1)
+    assert kind == (0 if layout == "far_clusters" else 1)
     want = brute_pairs(lo, hi, is_plane, pw)
     assert pairs.dtype == np.int64 and pairs.shape == want.shape
     assert np.array_equal(pairs, want)
@@ -153,7 +166,7 @@ def test_find_pairs_matches_brute_force(n, layout, seed):
     # warm start: jiggle, re-run with the previous order, compare to a cold run
     pos2 = pos + rng.normal(scale=0.02, size=pos.shape)
     lo2, hi2, pw2 = aabbs(t, pos2, quat, grow=0.01)
-    warm, _, _ = find_pairs(lo2, hi2, is_plane, pw2, order, axis)
+    warm, _, _ = find_pairs(lo2, hi2, is_plane, pw2, order, -1)
     cold, _, _ = find_pairs(lo2, hi2, is_plane, pw2, np.empty(0, np.int64), -1)
     assert np.array_equal(warm, cold)
     assert np.array_equal(warm, brute_pairs(lo2, hi2, is_plane, pw2))

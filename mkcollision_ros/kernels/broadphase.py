@@ -8,14 +8,23 @@ Phases
      +-inf on every axis except the one its normal is aligned with (if any), and its
      world half-space ``n_w . x <= d_w`` (grown by margin and ``grow``) is written to
      ``plane_w`` for the pair test.
-  2. ``find_pairs``   - a uniform grid, cell edge GRID_CELL_SCALE x the mean largest
-     AABB extent, hashed (Morton code folded onto the table size) into a table of
-     counting-sorted entries; every body is entered in each cell its AABB touches, and
-     a pair is reported only from the lower body's row and only in the cell holding the
-     corner max(lo_i, lo_j), so exactly once.  Bodies spanning more than GRID_BIG_CELLS
-     cells are tested against every body instead.  Rows are visited in the previous
-     call's space-filling order (passed in and handed back, the broad phase keeps no
-     state).  Each plane is paired with every non-plane body whose AABB reaches its
+  2. ``find_pairs``   - a uniform grid, one of two kinds.
+     The dense grid, whenever its table is small (at most DENSE_CELLS_PER_BODY cells a
+     body): cell edge = the largest AABB extent, so two overlapping boxes have their
+     centres in the same or neighbouring cells; each body is entered once, in the cell
+     of its centre (a counting sort over a table of every cell, x-major, z fastest), and
+     its row reads the 3 x 3 columns around it, each three cells along z one
+     contiguous run.  A pair is reported from the lower body's row.  Bodies larger than
+     DENSE_BIG_FACTOR x the mean extent are tested against every body instead.
+     The hashed grid, for spread or clustered scenes: cell edge GRID_CELL_SCALE x the
+     mean largest AABB extent, hashed (Morton code folded onto the table size) into a
+     table of counting-sorted entries; every body is entered in each cell its AABB
+     touches, and a pair is reported only from the lower body's row and only in the
+     cell holding the corner max(lo_i, lo_j), so exactly once.  Bodies spanning more
+     than GRID_BIG_CELLS cells are tested against every body instead.  Rows are visited
+     in the previous call's space-filling order (passed in and handed back, the broad
+     phase keeps no state).  The dense grid costs about a third of the hashed one at
+     10,000 bodies (one entry a body instead of about four, and no hashing).  Each plane is paired with every non-plane body whose AABB reaches its
      grown half-space (the AABB corner farthest along -n_w satisfies n_w . x <= d_w).
      Plane-plane pairs are never reported (the narrow phase does not run them).
   3. ``filter_pairs`` (static / group-mask / allowed pairs) and ``normalise_poses``:
@@ -62,6 +71,14 @@ GRID_ROW_SLOTS = 16
 # at most this many cells along an axis (the cell grows for very spread scenes; keys
 # pack each cell coordinate in 21 bits)
 GRID_MAX_CELLS = 1 << 20
+# the dense grid (one entry per body): bodies larger than this x the mean largest
+# extent are tested against every body; the table has at most this many cells per body
+# (+ DENSE_MIN_CELLS), for which the cell may grow to DENSE_MAX_GROW x the largest
+# extent; a scene that still needs more cells takes the hashed grid
+DENSE_BIG_FACTOR = 4.0
+DENSE_CELLS_PER_BODY = 4
+DENSE_MIN_CELLS = 4096
+DENSE_MAX_GROW = 2.0
 
 
 def world_aabbs(codes, params, vrange, verts, pos_w, quat_w, grow, lo, hi, plane_w):
@@ -200,6 +217,28 @@ def _cell_key(ix, iy, iz):
     return (ix << 42) | (iy << 21) | iz
 
 
+@njit_kernel
+def _row_output(r, write, out, offsets, slots):
+    """Where row r writes its keys: (done, base, keys).  The first pass (not ``write``)
+    writes into the row's own slots; the second runs only the rows that did not fit
+    (done: those that did), straight into ``out`` from offsets[r]."""
+    if write:
+        return offsets[r + 1] - offsets[r] <= slots.shape[1], offsets[r], out
+    return False, r * slots.shape[1], slots.reshape(-1)
+
+
+@njit_kernel
+def _sort_run(keys, base, count):
+    """keys[base:base + count] ascending in place (a row's few keys: insertion sort)."""
+    for a in range(base + 1, base + count):
+        v = keys[a]
+        d = a - 1
+        while d >= base and keys[d] > v:
+            keys[d + 1] = keys[d]
+            d -= 1
+        keys[d + 1] = v
+
+
 @njit_parallel
 def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
               e_body, e_key, e_cmin, e_box, n, counts, write, out, offsets, slots):
@@ -215,19 +254,14 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
     reference counting.)
     """
     m = bodies.shape[0]
+    cap = slots.shape[1]
     for q in prange(m):
         r = order[q]      # rows in space-filling order (cache), each in its own slots
         i = bodies[r]
         c = 0
-        cap = slots.shape[1]
-        if write:
-            base = offsets[r]
-            if offsets[r + 1] - base <= cap:     # done by the first pass
-                continue
-            dst = out
-        else:
-            base = r * cap
-            dst = slots.reshape(-1)
+        done, base, dst = _row_output(r, write, out, offsets, slots)
+        if done:
+            continue
         if is_big[r]:
             for t in range(r + 1, m):
                 j = bodies[t]
@@ -273,15 +307,165 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
                                 if write or c < cap:
                                     dst[base + c] = i * n + bodies[t]
                                 c += 1
-        # the row's keys ascending (few per row: insertion sort)
         if write or c <= cap:
-            for a in range(base + 1, base + c):
-                v = dst[a]
-                d = a - 1
-                while d >= base and dst[d] > v:
-                    dst[d + 1] = dst[d]
-                    d -= 1
-                dst[d + 1] = v
+            _sort_run(dst, base, c)
+        counts[r] = c
+
+
+@njit_kernel
+def _dense_grid(lo, hi, bodies):
+    """The dense grid of the non-plane ``bodies`` (see ``find_pairs``), or ok False when
+    its table would be too large.  Returns (ok, cell (m, 3) int64 each row's cell,
+    ncell (3,), start (cells + 1,) each cell's first entry, e_body (E,) and e_box (E, 6)
+    the entries' body and AABB lo, hi in cell order, rows (m,) the rows in cell order
+    then the big ones, big (B,) the big rows, is_big (m,))."""
+    m = bodies.shape[0]
+    ext = np.empty(m)
+    total = 0.0
+    for r in range(m):
+        i = bodies[r]
+        e = 0.0
+        for k in range(3):
+            e = max(e, hi[i, k] - lo[i, k])
+        ext[r] = e
+        total += e
+    mean = total / max(m, 1)
+    is_big = np.zeros(m, np.bool_)
+    n_big = 0
+    h = 0.0
+    for r in range(m):
+        if ext[r] > DENSE_BIG_FACTOR * mean:
+            is_big[r] = True
+            n_big += 1
+        else:
+            h = max(h, ext[r])
+    # a little over the largest extent: centres at most h apart stay within one cell
+    # of each other after rounding
+    h = h * (1.0 + 1e-6) if h > 0.0 else 1.0
+    origin = np.full(3, np.inf)
+    top = np.full(3, -np.inf)
+    for r in range(m):
+        if not is_big[r]:
+            i = bodies[r]
+            for k in range(3):
+                c = 0.5 * (lo[i, k] + hi[i, k])
+                origin[k] = min(origin[k], c)
+                top[k] = max(top[k], c)
+    span = np.zeros(3)
+    for k in range(3):
+        if top[k] > origin[k]:
+            span[k] = top[k] - origin[k]
+        else:
+            origin[k] = 0.0
+    limit = float(DENSE_CELLS_PER_BODY * m + DENSE_MIN_CELLS)
+    cells = (span[0] / h + 1.0) * (span[1] / h + 1.0) * (span[2] / h + 1.0)
+    if cells > limit:                  # grow the cell, within DENSE_MAX_GROW
+        lo_h = h
+        hi_h = DENSE_MAX_GROW * h
+        if (span[0] / hi_h + 1.0) * (span[1] / hi_h + 1.0) * (span[2] / hi_h + 1.0) > limit:
+            return (False, np.empty((0, 3), np.int64), np.ones(3, np.int64),
+                    np.zeros(1, np.int64), np.empty(0, np.int64), np.empty((0, 6)),
+                    np.empty(0, np.int64), np.empty(0, np.int64), is_big)
+        for _ in range(30):            # bisection on the edge
+            mid = 0.5 * (lo_h + hi_h)
+            if (span[0] / mid + 1.0) * (span[1] / mid + 1.0) * (span[2] / mid + 1.0) > limit:
+                lo_h = mid
+            else:
+                hi_h = mid
+        h = hi_h
+    ncell = np.ones(3, np.int64)
+    for k in range(3):
+        ncell[k] = np.int64(math.floor(span[k] / h)) + 1
+    n_cells = ncell[0] * ncell[1] * ncell[2]
+    cell = np.zeros((m, 3), np.int64)
+    flat = np.empty(m, np.int64)
+    start = np.zeros(n_cells + 1, np.int64)
+    for r in range(m):
+        if is_big[r]:
+            continue
+        i = bodies[r]
+        for k in range(3):
+            v = np.int64(math.floor((0.5 * (lo[i, k] + hi[i, k]) - origin[k]) / h))
+            cell[r, k] = min(max(v, 0), ncell[k] - 1)
+        flat[r] = (cell[r, 0] * ncell[1] + cell[r, 1]) * ncell[2] + cell[r, 2]
+        start[flat[r] + 1] += 1
+    for c in range(n_cells):
+        start[c + 1] += start[c]
+    fill = start[:n_cells].copy()
+    n_entries = m - n_big
+    e_body = np.empty(n_entries, np.int64)
+    e_box = np.empty((n_entries, 6))
+    rows = np.empty(m, np.int64)
+    big = np.empty(n_big, np.int64)
+    b = 0
+    for r in range(m):
+        if is_big[r]:
+            big[b] = r
+            rows[n_entries + b] = r
+            b += 1
+            continue
+        e = fill[flat[r]]
+        fill[flat[r]] += 1
+        i = bodies[r]
+        e_body[e] = i
+        rows[e] = r
+        for k in range(3):
+            e_box[e, k] = lo[i, k]
+            e_box[e, 3 + k] = hi[i, k]
+    return True, cell, ncell, start, e_body, e_box, rows, big, is_big
+
+
+@njit_parallel
+def _dense_par(bodies, rows, lo, hi, cell, ncell, start, e_body, e_box, big, is_big, n,
+               counts, write, out, offsets, slots):
+    """The dense grid's pairs (i, j), i < j, of each body i = bodies[r] (see
+    ``find_pairs``): the entries of the 3 x 3 x 3 cells around its own, plus every big
+    body; a big body's row tests every body.  ``write``, ``counts``, ``out``,
+    ``offsets`` and ``slots`` as in ``_grid_par``.  (One loop body, as there.)"""
+    m = bodies.shape[0]
+    cap = slots.shape[1]
+    ny = ncell[1]
+    nz = ncell[2]
+    for q in prange(m):
+        r = rows[q]       # rows in cell order (cache), each in its own slots
+        i = bodies[r]
+        c = 0
+        done, base, dst = _row_output(r, write, out, offsets, slots)
+        if done:
+            continue
+        lo0, lo1, lo2 = lo[i, 0], lo[i, 1], lo[i, 2]
+        hi0, hi1, hi2 = hi[i, 0], hi[i, 1], hi[i, 2]
+        if is_big[r]:
+            for t in range(m):
+                j = bodies[t]
+                if (j > i and lo0 <= hi[j, 0] and lo[j, 0] <= hi0 and lo1 <= hi[j, 1]
+                        and lo[j, 1] <= hi1 and lo2 <= hi[j, 2] and lo[j, 2] <= hi2):
+                    if write or c < cap:
+                        dst[base + c] = i * n + j
+                    c += 1
+        else:
+            for t in range(big.shape[0]):
+                j = bodies[big[t]]
+                if (j > i and lo0 <= hi[j, 0] and lo[j, 0] <= hi0 and lo1 <= hi[j, 1]
+                        and lo[j, 1] <= hi1 and lo2 <= hi[j, 2] and lo[j, 2] <= hi2):
+                    if write or c < cap:
+                        dst[base + c] = i * n + j
+                    c += 1
+            z0 = max(cell[r, 2] - 1, 0)
+            z1 = min(cell[r, 2] + 1, nz - 1)
+            for ix in range(max(cell[r, 0] - 1, 0), min(cell[r, 0] + 1, ncell[0] - 1) + 1):
+                for iy in range(max(cell[r, 1] - 1, 0), min(cell[r, 1] + 1, ny - 1) + 1):
+                    column = (ix * ny + iy) * nz
+                    for e in range(start[column + z0], start[column + z1 + 1]):
+                        j = e_body[e]
+                        if (j > i and lo0 <= e_box[e, 3] and e_box[e, 0] <= hi0
+                                and lo1 <= e_box[e, 4] and e_box[e, 1] <= hi1
+                                and lo2 <= e_box[e, 5] and e_box[e, 2] <= hi2):
+                            if write or c < cap:
+                                dst[base + c] = i * n + j
+                            c += 1
+        if write or c <= cap:
+            _sort_run(dst, base, c)
         counts[r] = c
 
 
@@ -333,36 +517,13 @@ def _grid_extent(lo, hi, rows):
 
 
 @njit_kernel
-def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
-    """Overlapping AABB pairs.
-
-    lo, hi float64 (N, 3): world AABBs (m) from ``world_aabbs``.
-    is_plane bool (N,); plane_w float64 (N, 4): grown world half-spaces of the planes.
-    order_prev int64 (m,): the order returned by the previous call (or empty): the
-        bodies are visited in it, which keeps memory accesses local; any permutation of
-        the m non-plane bodies' ranks is valid, anything else is ignored.  The result
-        does not depend on it.  axis_prev: unused (0 or -1).
-    Returns (pairs int64 (P, 2) with i < j sorted lexicographically,
-             order int64 (m,) to pass back as ``order_prev``, 0).
-    """
-    n = lo.shape[0]
-    n_planes = 0
-    for i in range(n):
-        if is_plane[i]:
-            n_planes += 1
-    bodies = np.empty(n - n_planes, np.int64)
-    planes = np.empty(n_planes, np.int64)
-    a = 0
-    b = 0
-    for i in range(n):
-        if is_plane[i]:
-            planes[b] = i
-            b += 1
-        else:
-            bodies[a] = i
-            a += 1
+def _hashed_grid(lo, hi, bodies, order_prev):
+    """The hashed grid of the non-plane ``bodies`` (see ``find_pairs``).  Returns (cmin,
+    cmax (m, 3) each row's cell range, big (B,) the big rows, is_big (m,), mask, shift
+    of the bucket table, bucket_start, the entries e_body, e_key, e_cmin, e_box in
+    bucket order, order (m,) the rows to visit, new_order (m,) the next call's)."""
     m = bodies.shape[0]
-    # --- the grid: cell size from the mean largest extent, origin at the lowest corner
+    # cell size from the mean largest extent, origin at the lowest corner
     origin, top, h, span = _grid_extent(lo, hi, bodies)
     if span / h > GRID_MAX_CELLS:
         h = span / GRID_MAX_CELLS
@@ -462,6 +623,41 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     for b in range(n_big):
         new_order[q] = big[b]
         q += 1
+    return (cmin, cmax, big, is_big, mask, shift, bucket_start, e_body, e_key, e_cmin, e_box,
+            order, new_order)
+
+
+@njit_kernel
+def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
+    """Overlapping AABB pairs.
+
+    lo, hi float64 (N, 3): world AABBs (m) from ``world_aabbs``.
+    is_plane bool (N,); plane_w float64 (N, 4): grown world half-spaces of the planes.
+    order_prev int64 (m,): the order returned by the previous call (or empty): the
+        bodies are visited in it, which keeps memory accesses local; any permutation of
+        the m non-plane bodies' ranks is valid, anything else is ignored.  The result
+        does not depend on it (the dense grid does not use it).  axis_prev: unused.
+    Returns (pairs int64 (P, 2) with i < j sorted lexicographically,
+             order int64 (m,) to pass back as ``order_prev``,
+             kind: 1 the dense grid ran, 0 the hashed grid).
+    """
+    n = lo.shape[0]
+    n_planes = 0
+    for i in range(n):
+        if is_plane[i]:
+            n_planes += 1
+    bodies = np.empty(n - n_planes, np.int64)
+    planes = np.empty(n_planes, np.int64)
+    a = 0
+    b = 0
+    for i in range(n):
+        if is_plane[i]:
+            planes[b] = i
+            b += 1
+        else:
+            bodies[a] = i
+            a += 1
+    m = bodies.shape[0]
     # --- body pairs: count per row, then write each row's keys sorted in its slot
     # (one pass writes up to GRID_ROW_SLOTS keys per row into fixed slots and counts;
     # only rows with more are run again, straight into the output)
@@ -469,8 +665,18 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     offsets = np.zeros(m + 1, np.int64)
     slots = np.empty((m, GRID_ROW_SLOTS), np.int64)
     dummy = np.empty(0, np.int64)
-    _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
-              e_body, e_key, e_cmin, e_box, n, counts, np.bool_(False), dummy, offsets, slots)
+    dense, cell, ncell, start, d_body, d_box, d_rows, d_big, d_is_big = _dense_grid(
+        lo, hi, bodies)
+    if dense:
+        new_order = d_rows
+        _dense_par(bodies, d_rows, lo, hi, cell, ncell, start, d_body, d_box, d_big,
+                   d_is_big, n, counts, np.bool_(False), dummy, offsets, slots)
+    else:
+        (cmin, cmax, big, is_big, mask, shift, bucket_start, e_body, e_key, e_cmin, e_box,
+         order, new_order) = _hashed_grid(lo, hi, bodies, order_prev)
+        _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucket_start,
+                  e_body, e_key, e_cmin, e_box, n, counts, np.bool_(False), dummy, offsets,
+                  slots)
     n_over = 0
     for r in range(m):
         offsets[r + 1] = offsets[r] + counts[r]
@@ -482,10 +688,13 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
         if counts[r] <= GRID_ROW_SLOTS:
             for c in range(counts[r]):
                 body_keys[offsets[r] + c] = slots[r, c]
-    if n_over > 0:
+    if n_over > 0 and dense:
+        _dense_par(bodies, d_rows, lo, hi, cell, ncell, start, d_body, d_box, d_big,
+                   d_is_big, n, counts, np.bool_(True), body_keys, offsets, slots)
+    elif n_over > 0:
         _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift,
-                  bucket_start, e_body, e_key, e_cmin, e_box, n, counts, np.bool_(True), body_keys,
-                  offsets, slots)
+                  bucket_start, e_body, e_key, e_cmin, e_box, n, counts, np.bool_(True),
+                  body_keys, offsets, slots)
     # --- planes against every body reaching their half-space
     hit = np.zeros((n_planes, m), np.bool_)
     if n_planes > 0 and m > 0:
@@ -521,7 +730,7 @@ def find_pairs(lo, hi, is_plane, plane_w, order_prev, axis_prev):
     for t in range(keys.shape[0]):
         pairs[t, 0] = keys[t] // n
         pairs[t, 1] = keys[t] % n
-    return pairs, new_order, np.int64(0)
+    return pairs, new_order, np.int64(1 if dense else 0)
 
 
 @njit_kernel

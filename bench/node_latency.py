@@ -41,7 +41,7 @@ os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 50)
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 from bench.common import print_table, scene  # noqa: E402
-from mkcollision_ros.node import use_large_messages_profile  # noqa: E402
+from mkcollision_ros.fastdds import use_large_messages_profile  # noqa: E402
 
 # every process here (this subscriber, the publisher, the nodes) takes the package's
 # Fast DDS profile, as the README asks of a large scene's publisher
@@ -144,14 +144,14 @@ def run_case(n, rate, kind, markers, seconds, shards=1, executor="events"):
         pub = subprocess.Popen([sys.executable, "-c", PUBLISHER, root, str(n), str(rate),
                                 str(seconds), kind], stdout=subprocess.PIPE, text=True)
         c0, w0 = sum(cpu_seconds(node.pid) for node in nodes), time.time()
-        executor = EventsExecutor()
-        executor.add_node(sub)
+        spinner = EventsExecutor()
+        spinner.add_node(sub)
         while pub.poll() is None:
-            executor.spin_once(timeout_sec=0.01)
+            spinner.spin_once(timeout_sec=0.01)
         end = time.time() + 1.0
         while time.time() < end:
-            executor.spin_once(timeout_sec=0.01)
-        executor.remove_node(sub)
+            spinner.spin_once(timeout_sec=0.01)
+        spinner.remove_node(sub)
         cpu = (sum(cpu_seconds(node.pid) for node in nodes) - c0) / (time.time() - w0)
         sent = [float(x) for x in pub.stdout.read().split()]
         sub.destroy_node()

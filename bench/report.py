@@ -84,12 +84,15 @@ SECTIONS = (
         "lists what each kernel's compile takes."),
     Section(
         "node_latency", "The node end to end through DDS",
-        ("bench/node_latency.py", "--bodies", "100", "1000", "--seconds", "10"),
+        ("bench/node_latency.py", "--bodies", "100", "1000", "--seconds", "10",
+         "--executors", "events", "single_threaded"),
         "The installed node (`trigger: on_message`, the shipped defaults: markers at "
         "5 Hz, at most 200 body markers each), a publisher process at 100 Hz stamping "
-        "each message just before publishing it, and a subscriber timing each "
-        "`contacts` message against that stamp; the bench scene at 0.2 touching pairs "
-        "per body, every body moving.  The three processes share the two cores.  "
+        "each message just before publishing it, and a subscriber (rclpy's "
+        "EventsExecutor) timing each `contacts` message against that stamp; the bench "
+        "scene at 0.2 touching pairs per body, every body moving.  The node runs on each "
+        "of its two executors (parameter `executor`).  All three processes take the "
+        "package's Fast DDS profile (README, \"Large scenes\") and share the two cores.  "
         "\"published\" counts from the first message the node answered (the ones "
         "before are lost to discovery).  The node runs numba's OpenMP threads with "
         "`OMP_WAIT_POLICY=PASSIVE` (node.py): spinning threads would take a core from the "

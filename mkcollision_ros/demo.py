@@ -21,6 +21,7 @@ import time
 from .config import bodies_from_params, load_params_file
 from .demo_scenes import (SCENE_NAMES, Scene, demo_poses, make_scene, note_contacts,
                           params_body, swarm, write_params)
+from .fastdds import use_large_messages_profile
 
 __all__ = ["demo_poses", "run", "main", "publisher_main", "scene_params_file"]
 DEFAULT_SCENE = "bowling"
@@ -205,6 +206,7 @@ def run(seconds, scene=DEFAULT_SCENE, bodies=None, params_file=None, record=None
     proc = subprocess.Popen(node_cmd + args, start_new_session=True,
                             preexec_fn=die_with_parent)
     context = rclpy.Context()
+    use_large_messages_profile()
     rclpy.init(context=context)
     node = rclpy.create_node("mkcollision_demo", context=context)
     executor = SingleThreadedExecutor(context=context)
@@ -365,6 +367,7 @@ def publisher_main(argv=None):
     scene, params, _ = prepare(args.scene, args.bodies, args.params_file)
     print(f"[demo_publisher] scene {scene.name}; start the node with: ros2 run "
           f"mkcollision_ros collision_node --ros-args --params-file {params}", flush=True)
+    use_large_messages_profile()
     rclpy.init(args=ros_args)
     node = rclpy.create_node("mkcollision_demo_publisher")
     try:

@@ -55,34 +55,6 @@ import os
 # its threads; a user's own setting wins.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-# Fast DDS's shared-memory segment is 0.5 MB, so the pose and contact messages of large
-# scenes (BodyPoseArray of ~8,000 bodies, ContactArray of ~4,000 contacts) would go over
-# UDP in fragments and be lost whole on a busy machine.  The node's participant takes
-# the package's profile with a 16 MB segment (config/fastdds_large_messages.xml) unless
-# the user names a profile file; read by Fast DDS at rclpy.init, so set at import.
-LARGE_MESSAGES_PROFILE = os.path.join("config", "fastdds_large_messages.xml")
-
-
-def use_large_messages_profile():
-    """Point Fast DDS at the package's large-messages profile, unless another RMW is
-    chosen or a profile file is already named.  Returns the profile's path, or None."""
-    if os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp") not in ("", "rmw_fastrtps_cpp"):
-        return None
-    if os.environ.get("FASTRTPS_DEFAULT_PROFILES_FILE") or os.environ.get(
-            "FASTDDS_DEFAULT_PROFILES_FILE"):
-        return None
-    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory
-    try:
-        path = os.path.join(get_package_share_directory("mkcollision_ros"),
-                            LARGE_MESSAGES_PROFILE)
-    except PackageNotFoundError:
-        return None
-    if not os.path.isfile(path):
-        return None
-    os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"] = path
-    return path
-
-
 import collections  # noqa: E402
 import math
 import time
@@ -107,6 +79,7 @@ from visualization_msgs.msg import MarkerArray
 import msg_adapters
 
 from . import compile_progress, rerun_log
+from .fastdds import use_large_messages_profile
 from .arbiters import EV_PERSISTED
 from .config import bodies_from_params, pose_topics_from_params
 from .crosscheck import cross_check, describe, repro

@@ -54,7 +54,7 @@ PARAMETERS = (
           "newest; never a queue); timer: steps at rate_hz when new poses arrived",
           choices=("on_message", "timer"), read_only=True),
     Param("executor", "events", "events: rclpy's EventsExecutor (a C++ event queue, "
-          "less latency: BENCHMARKS.md); single_threaded: rclpy's SingleThreadedExecutor",
+          "less CPU a message); single_threaded: rclpy's SingleThreadedExecutor",
           choices=("events", "single_threaded"), read_only=True),
     Param("rate_hz", 30.0, "Hz; steps per second with trigger timer", 0.1, 10000.0),
     Param("reliable_inputs", False, "pose subscriptions reliable instead of best effort",

@@ -168,7 +168,7 @@ def test_large_messages_profile_is_taken_unless_the_user_names_one(monkeypatch):
     """The node points Fast DDS at the installed profile, whose shared-memory segment
     holds a 10,000-body BodyPoseArray; a user's own profile or another RMW is left alone."""
     import xml.etree.ElementTree as ET
-    from mkcollision_ros.node import use_large_messages_profile
+    from mkcollision_ros.fastdds import use_large_messages_profile
     for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE",
                 "RMW_IMPLEMENTATION"):
         monkeypatch.delenv(var, raising=False)

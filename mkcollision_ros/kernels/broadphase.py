@@ -258,7 +258,7 @@ def _grid_par(bodies, order, lo, hi, cmin, cmax, big, is_big, mask, shift, bucke
     for q in prange(m):
         r = order[q]      # rows in space-filling order (cache), each in its own slots
         i = bodies[r]
-        c = 0
+        c = np.int64(0)      # typed int64 at once (jit.py, "Literal")
         done, base, dst = _row_output(r, write, out, offsets, slots)
         if done:
             continue
@@ -429,7 +429,7 @@ def _dense_par(bodies, rows, lo, hi, cell, ncell, start, e_body, e_box, big, is_
     for q in prange(m):
         r = rows[q]       # rows in cell order (cache), each in its own slots
         i = bodies[r]
-        c = 0
+        c = np.int64(0)      # typed int64 at once (jit.py, "Literal")
         done, base, dst = _row_output(r, write, out, offsets, slots)
         if done:
             continue

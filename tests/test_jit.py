@@ -158,7 +158,7 @@ def test_the_one_memo_inliner_emits_the_same_llvm_ir(tmp_path):
 
 def _compiled_kernel_calls_with_constants():
     """(file, line, kernel, argument) for every call of a compiled, not inlined kernel
-    (njit_kernel, njit_parallel) inside kernels/ whose argument is an integer or boolean
+    (njit_kernel, njit_separate, njit_parallel) inside kernels/ whose argument is an integer or boolean
     constant: numba types such an argument as a literal and compiles the callee once
     per value (jit.py, "Literal")."""
     import ast
@@ -167,7 +167,8 @@ def _compiled_kernel_calls_with_constants():
     trees = {p: ast.parse(p.read_text()) for p in sorted(root.rglob("*.py"))}
     compiled = {n.name for t in trees.values() for n in ast.walk(t)
                 if isinstance(n, ast.FunctionDef) and n.decorator_list
-                and ast.unparse(n.decorator_list[0]) in ("njit_kernel", "njit_parallel")}
+                and ast.unparse(n.decorator_list[0])
+                in ("njit_kernel", "njit_separate", "njit_parallel")}
     found = []
     for path, tree in trees.items():
         # calls from compiled code only (a call from Python passes a plain int64)
@@ -240,3 +241,96 @@ def test_run_blocks_raises_a_failing_block_after_every_block_ends():
         assert done == [0]
     finally:
         numba.set_num_threads(old)
+
+
+_SEPARATE_MODULE = '''
+import numpy as np
+from mkcollision_ros.kernels import jit
+
+
+@jit.njit_separate
+def big(a, x):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += np.sin(a[i] * x)
+    return s
+
+
+@jit.njit_kernel
+def mid(a, x):
+    return big(a, x) + 1.0
+
+
+@jit.njit_kernel
+def top(a):
+    t = 0.0
+    for k in range(3):
+        t += mid(a, float(k))
+    return t
+'''
+
+_SEPARATE_RUN = '''
+import json, sys
+import numpy as np
+from mkcollision_ros.kernels import jit
+import sepkern
+
+value = sepkern.top(np.arange(5.0))
+sig = sepkern.top.signatures[0]
+info = {"installed": jit.SEPARATE_LINKING, "value": value,
+        "top_hits": sum(sepkern.top.stats.cache_hits.values()),
+        "big_loaded": len(sepkern.big.signatures)}
+if not info["top_hits"]:
+    symbol = sepkern.big.overloads[sepkern.big.signatures[0]].fndesc.mangled_name
+    llvm = {k.__name__: k.inspect_llvm(k.signatures[0]) for k in (sepkern.mid, sepkern.top)}
+    info["defines"] = {n: ("define" in t and any(symbol in line for line in t.splitlines()
+                                                  if line.startswith("define")))
+                       for n, t in llvm.items()}
+    info["declares"] = {n: any(symbol in line for line in t.splitlines()
+                               if line.startswith("declare")) for n, t in llvm.items()}
+print(json.dumps(info))
+'''
+
+
+def _run_separate(tmp_path, cache, link_all=False):
+    import json
+    import os
+    import subprocess
+    import sys
+    (tmp_path / "sepkern.py").write_text(_SEPARATE_MODULE)
+    (tmp_path / "run.py").write_text(_SEPARATE_RUN)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache),
+               MKCOLLISION_LINK_ALL="1" if link_all else "0",
+               PYTHONPATH=str(tmp_path) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, str(tmp_path / "run.py")], env=env,
+                         capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def test_a_separate_kernel_is_called_by_its_callers_and_loaded_before_them(tmp_path):
+    """jit.njit_separate: callers declare the separate kernel's symbol instead of
+    defining a linked copy of it (with MKCOLLISION_LINK_ALL=1 they link the copy); a
+    caller loaded from numba's cache loads the separate kernel first; with the separate
+    kernel's cache entries gone, the caller is compiled again instead of calling a
+    symbol that no longer exists, and every run gives the same value.  (A linked copy
+    LLVM inlines everywhere is dropped, so the linked callers neither define nor
+    declare it.)"""
+    import numpy as np
+    expected = sum(np.sin(np.arange(5.0) * k).sum() + 1.0 for k in range(3))
+    cache = tmp_path / "cache"
+    first = _run_separate(tmp_path, cache)
+    assert first["installed"] is True
+    assert first["top_hits"] == 0
+    assert first["declares"] == {"mid": True, "top": True}
+    assert first["defines"] == {"mid": False, "top": False}
+    cached = _run_separate(tmp_path, cache)
+    assert cached["top_hits"] == 1 and cached["big_loaded"] == 1
+    for path in cache.rglob("sepkern.big*"):
+        path.unlink()
+    recompiled = _run_separate(tmp_path, cache)
+    assert recompiled["top_hits"] == 0
+    linked = _run_separate(tmp_path, tmp_path / "linked_cache", link_all=True)
+    assert linked["installed"] is False
+    assert linked["declares"] == {"mid": False, "top": False}
+    for run in (first, cached, recompiled, linked):
+        assert abs(run["value"] - expected) < 1e-12

@@ -26,7 +26,7 @@ import numpy as np
 from .constants import (BOX, CAPSULE, M_ANALYTIC, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL,
                         OUT_PA, OUT_PB, PLANE, SPHERE, ST_NOT_RUN)
 from .geometry import borrow_args, inflation, shape_scale
-from .jit import borrow, njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel, njit_separate
 from .pairs.box_capsule import collide_box_capsule
 from .pairs.capsule_capsule import collide_capsule_capsule
 from .pairs.core_distance import _point_point_s, classify
@@ -77,7 +77,7 @@ def closed_form_ordered(sa, sb, verts, r_ab, t_ab, out):
     return dist
 
 
-@njit_kernel
+@njit_separate
 def collide_analytic(sa, sb, verts, r_ab, t_ab, out):
     """Exact closed-form collision of a supported pair; ST_NOT_RUN otherwise.
 

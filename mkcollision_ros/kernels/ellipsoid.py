@@ -57,7 +57,7 @@ from .constants import (ELLIPSOID, ELL_MAX_ITERS, JACOBI_OFF_TOL, JACOBI_SWEEPS,
                         M_ELLIPSOID_SAMPLED, OUT_DIST, OUT_ITERS, OUT_METHOD, OUT_NORMAL, OUT_PA,
                         OUT_PB, P_MARGIN, SPHERE, ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED,
                         ST_TOUCHING, TOUCH_TOL)
-from .jit import njit_kernel
+from .jit import njit_kernel, njit_separate
 
 _G = (1.0 + 5.0 ** 0.5) / 2.0
 ICO_VERTS = np.array([
@@ -237,7 +237,7 @@ def _sym_eig3(m):
     return w, v
 
 
-@njit_kernel
+@njit_separate
 def ellipsoid_exact(sa, sb, r_ab, t_ab, out):
     """Exact ellipsoid-ellipsoid contact test in A's unit-sphere (T) frame.
 
@@ -297,7 +297,7 @@ def ellipsoid_exact(sa, sb, r_ab, t_ab, out):
     return _classify(gap, scale)
 
 
-@njit_kernel
+@njit_separate
 def ellipsoid_sampled(sa, sb, r_ab, t_ab, n_subdiv, out):
     """Approximate (sampled) ellipsoid-ellipsoid test in A's unit-sphere frame.
 

@@ -70,7 +70,7 @@ from .gjk_epa_workspace import (_CAND, _FD, _FN, _FS_ROWS, _IA, _IC, _IE, _IF, _
                                 _T_PAT_E2, _T_PAT_W, _T_PAT_WA, _T_PAT_WB, _T_UD, _T_UWA, _T_W,
                                 _T_WA, _T_WB, _V, _VA, _VB, _VD, _W, _WA, _WB, _dot,
                                 _take_polished, borrow_gjk_workspace)
-from .jit import borrow, njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel, njit_separate
 from .polish_crease import _kink_polish
 from .polish_faces import _crossing_test, _cylinders_crossing, _face_polish
 from .polish_newton import _epa_polish, _tangent_basis
@@ -282,7 +282,7 @@ def _trace_polytope(fs, V, F, alive, nv, nf):
             r += 1
 
 
-@njit_kernel
+@njit_separate
 def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     """Expanding Polytope Algorithm on the full shapes from the tetrahedron W[:4] (which
     holds the origin; W, WA, WB of the workspace ``ws``).  Writes ws[1][_RES:_RES + 10] (10,) =

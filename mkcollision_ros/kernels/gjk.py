@@ -59,7 +59,7 @@ from .geometry import borrow_args, meet, minkowski_core_xyz
 from .gjk_epa_workspace import (_FS_ROWS, _L3, _LAM, _LAMP, _PK, _PN, _PW, _T_D, _T_MIN_D,
                                 _T_MIN_W, _T_SHIFT, _T_VPREV, _T_W, _T_WA, _T_WB, _VOL, _VV, _W,
                                 _WA, _WAP, _WB, _WBP, _WP, _dot, borrow_gjk_workspace)
-from .jit import borrow, njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel, njit_separate
 from .polish_crease import _kink_polish
 from .polish_faces import _face_polish, _hull_polish
 from .polish_newton import _newton_min_support
@@ -296,7 +296,7 @@ def _gjk_smooth_polish(sa, sb, verts, r_ab, t_ab, scale, ws, ns, nx, ny, nz,
     return kn + abs(k) if kn > 0 else kn - abs(k)
 
 
-@njit_kernel
+@njit_separate
 def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     """Witness points for an EPA result whose origin projection fell outside its face
     (sliver faces of flat or face-to-face contacts; the barycentric witnesses would then

@@ -103,7 +103,7 @@ from .gjk_epa_workspace import (_BC_ROWS, _FD, _FS_ROWS, _LAM, _RES, _T_EST_D, _
                                 _T_EST_WB, _T_MIN_D, _T_MIN_W, _T_MIN_WA, _T_MIN_WB, _T_NRM, _T_PA,
                                 _T_PB, _V, _VV, _W, _WA, _WB, _dot, borrow_gjk_workspace,
                                 make_gjk_workspace)
-from .jit import borrow, njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel, njit_separate
 from .mpr import MPR_WS_ROWS, mpr_ws
 from .pairs.box_cylinder import collide_box_cylinder
 from .pairs.capsule_cylinder import collide_capsule_cylinder
@@ -189,7 +189,7 @@ def gjk_epa(sa, sb, verts, r_ab, t_ab, out):
     return gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, make_gjk_workspace(), math.inf)
 
 
-@njit_kernel
+@njit_separate
 def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     """``gjk_epa`` with caller-provided scratch buffers ``ws`` (make_gjk_workspace()).
 
@@ -397,7 +397,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     return st
 
 
-@njit_kernel
+@njit_separate
 def _caps_fallback(sa, sb, verts, r_ab, t_ab, scale, out, st, ws, stalled):
     """EPA hit its caps (phase 3: a valley of nearly equally deep directions that the
     polytope cannot enclose to tolerance, such as a small body deep inside a large

@@ -53,6 +53,26 @@ cheap, both active only while numba compiles and neither changing what is compil
   in about two thirds of the time.  It is applied to numba 0.68.1 only, the pinned version
   whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
 
+Separate kernels (``njit_separate``): numba links a copy of every called kernel's code
+into its caller's module, then optimises and generates machine code for the whole
+module again; so each level of a call chain compiles everything below it once more
+(``_collide_batch``, a loop of one call, took 26 s, all of it LLVM redoing
+``_collide_block``).  A separate kernel is compiled once, and its callers call its
+symbol: while a caller's library is finalised, a linked library that carries a separate
+kernel's mark (set on its compile results) is not linked in; numba's declaration of the
+callee stays a declaration, and LLVM's JIT resolves it against the kernel's own code,
+loaded in the same engine.  A caller's library records what it needs that way (its own
+separate callees and those of the libraries it links); the record goes into numba's
+cache with the caller's object code, and loading the caller from the cache first loads
+(or compiles) each of them, then checks its symbol, the name numba gave that compile,
+is the one the caller calls.  When it is not (a callee's cache entry lost, then
+compiled afresh) the caller is compiled again instead of being loaded
+(``MissingSeparateKernel``).  The mark goes on kernels called at most once a pair: a
+call by symbol costs a few ns and cannot be inlined, which a closed form or a support
+mapping would feel (their callers keep linked copies).  Applied to numba 0.68.1 only,
+whose code libraries it was written against; ``MKCOLLISION_LINK_ALL=1`` links every
+kernel as numba does.
+
 "Literal": an integer or boolean constant passed to a compiled (not inlined) kernel is
 typed ``Literal[int](c)`` or ``Literal[bool](c)``, and so is a loop variable before
 numba's type propagation has seen its later values (``k = 0`` ahead of ``k = axis`` in a
@@ -65,6 +85,7 @@ them: a cached kernel never compiles the kernels it calls).
 import copy
 import gc
 import hashlib
+import importlib
 import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -207,6 +228,119 @@ njit_parallel = numba.njit(cache=True, fastmath=False, nogil=True, parallel=True
 njit_inline = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy",
                          inline="always")
 prange = numba.prange
+
+# The library attribute that marks a compiled njit_separate kernel (its dependency
+# record, see _Dependency) and the one holding a library's own dependencies.
+_SEPARATE_TAG = "_mkcollision_separate"
+_DEPENDS_TAG = "_mkcollision_depends"
+
+
+class MissingSeparateKernel(Exception):
+    """A cached kernel calls a separate kernel that is neither loaded nor in the cache
+    under the symbol it was linked against: the cached kernel is compiled again."""
+
+
+def _separate_linking():
+    """Install the separate linking of njit_separate kernels in numba's code libraries
+    (module docstring, "Separate kernels"); returns whether it is installed."""
+    try:
+        from numba.core import codegen
+        lib_class = codegen.CPUCodeLibrary
+        plain_finalize = lib_class.finalize
+        plain_serialize = lib_class.serialize_using_object_code
+        plain_unserialize = lib_class._unserialize.__func__
+        plain_load = caching.Cache.load_overload
+    except (ImportError, AttributeError):
+        return False
+    if getattr(plain_finalize, "_separate", False):
+        return True
+    if numba.__version__ != "0.68.1":
+        return False
+
+    def finalize(self):
+        linked, depends = [], []
+        for library in self._linking_libraries:
+            dep = getattr(library, _SEPARATE_TAG, None)
+            if dep is None:
+                linked.append(library)
+                depends.extend(getattr(library, _DEPENDS_TAG, ()))
+            else:
+                # a call by symbol: the declaration numba wrote stays one
+                self._reload_init.update(library._reload_init)
+                depends.append(dep)
+        self._linking_libraries = linked
+        setattr(self, _DEPENDS_TAG, tuple(dict.fromkeys(depends)))
+        return plain_finalize(self)
+
+    def serialize_using_object_code(self):
+        name, kind, data = plain_serialize(self)
+        return name, kind, data + (getattr(self, _DEPENDS_TAG, ()),)
+
+    def _unserialize(cls, codegen_, state):
+        name, kind, data = state
+        depends = ()
+        if kind == "object" and len(data) == 3:
+            data, depends = data[:2], data[2]
+            for dep in depends:
+                dep.load(codegen_)
+        library = plain_unserialize(cls, codegen_, (name, kind, data))
+        setattr(library, _DEPENDS_TAG, depends)
+        return library
+
+    def load_overload(self, sig, target_context):
+        try:
+            return plain_load(self, sig, target_context)
+        except MissingSeparateKernel:
+            return None
+
+    finalize._separate = True
+    for name, fn in (("finalize", finalize),
+                     ("serialize_using_object_code", serialize_using_object_code)):
+        fn.__doc__ = getattr(lib_class, name).__doc__
+        setattr(lib_class, name, fn)
+    lib_class._unserialize = classmethod(_unserialize)
+    caching.Cache.load_overload = load_overload
+    return True
+
+
+class _Dependency(tuple):
+    """(module, qualname, argument types, symbol) of one compiled separate kernel:
+    what a caller's cached code needs loaded before its own (pickled in numba's cache
+    with the caller's object code)."""
+
+    def load(self, codegen_):
+        """Compile or load the kernel for these argument types; MissingSeparateKernel
+        unless its symbol is then the one the caller was linked against."""
+        module, qualname, args, symbol = self
+        kernel = importlib.import_module(module)
+        for part in qualname.split("."):
+            kernel = getattr(kernel, part)
+        kernel.compile(args)
+        if not codegen_._engine.is_symbol_defined(symbol):
+            raise MissingSeparateKernel(f"{module}.{qualname}{args}: {symbol}")
+
+
+SEPARATE_LINKING = (not numba.config.DISABLE_JIT
+                    and os.environ.get("MKCOLLISION_LINK_ALL", "") in ("", "0")
+                    and _separate_linking())
+
+
+def njit_separate(fn):
+    """njit_kernel, compiled once for all its callers, which call its symbol instead of
+    linking a copy of its code (module docstring, "Separate kernels")."""
+    kernel = njit_kernel(fn)
+    if not SEPARATE_LINKING:
+        return kernel
+    plain_add = kernel.add_overload
+
+    def add_overload(cres):
+        setattr(cres.library, _SEPARATE_TAG, _Dependency(
+            (fn.__module__, fn.__qualname__, tuple(cres.signature.args),
+             cres.fndesc.mangled_name)))
+        plain_add(cres)
+
+    kernel.add_overload = add_overload
+    return kernel
 
 
 def n_blocks(n_items, min_block):

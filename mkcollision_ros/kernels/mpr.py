@@ -56,7 +56,7 @@ from .constants import (MPR_MAX_ITERS, MPR_NUDGE, MPR_PARALLEL_SIN, MPR_REL_TOL,
                         ST_NOT_RUN, ST_PENETRATING, ST_SEPARATED, ST_TOUCHING, SUPPORT_TIE,
                         TOUCH_TOL)
 from .geometry import borrow_args, centre_core, minkowski_full_xyz, shape_scale
-from .jit import borrow, njit_inline, njit_kernel
+from .jit import borrow, njit_inline, njit_kernel, njit_separate
 from .tracebuf import (TR_HEADER_ROWS, TR_MPR_DISCOVERY, TR_MPR_REFINEMENT, trace_reset,
                        trace_rows)
 
@@ -214,7 +214,7 @@ def mpr(sa, sb, verts, r_ab, t_ab, out):
     return mpr_ws(sa, sb, verts, r_ab, t_ab, out, np.empty((MPR_WS_ROWS, 3)))
 
 
-@njit_kernel
+@njit_separate
 def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
     """``mpr`` with a caller-provided scratch buffer ``buf`` float64 (MPR_WS_ROWS, 3):
     rows 0-4 w, 5-9 wa, 10-14 wb, 15-16 the two centres.  At least

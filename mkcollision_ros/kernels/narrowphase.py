@@ -145,7 +145,7 @@ from .geometry import (borrow_args, quat_entries, quat_rotate_xyz, quat_to_matri
                        shape_scale, support_full_xyz)
 from .gjk_epa import gjk_epa_ws
 from .gjk_epa_workspace import borrow_gjk_workspace, make_gjk_workspace
-from .jit import borrow, keep_alive, n_blocks, njit_inline, njit_kernel, njit_parallel, prange
+from .jit import borrow, keep_alive, n_blocks, njit_inline, njit_kernel, njit_parallel, njit_separate, prange
 from .mpr import MPR_WS_ROWS, mpr_ws
 from .pairs.box_box import collide_box_box
 from .pairs.capsule_capsule import capsule_capsule_world
@@ -228,7 +228,7 @@ def _mpr(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     return st
 
 
-@njit_kernel
+@njit_separate
 def _run_ordered(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """Run ``method`` on a pair already in canonical order; result in A's frame.
     ``cutoff`` (m): see gjk_epa.gjk_epa_ws (closed forms are exact at any distance)."""
@@ -287,7 +287,7 @@ def collide_pair(sa, sb, verts, r_ab, t_ab, method, out):
                            math.inf)
 
 
-@njit_kernel
+@njit_separate
 def collide_pair_ws(sa, sb, verts, r_ab, t_ab, method, out, ws, cutoff):
     """``collide_pair`` with caller-provided scratch buffers ``ws`` (make_workspace());
     ``r_ab``/``t_ab`` may be ws[0][6:9]/ws[0][9] (only r_ba, t_ba, tmp, gjk are written).
@@ -491,7 +491,7 @@ def collide_world_ws(code_a, prm_a, vr_a, code_b, prm_b, vr_b, verts, pos_a, qua
     return st
 
 
-@njit_kernel
+@njit_separate
 def _collide_block(codes, params, vrange, verts, pairs, pos_w, quat_w, method, cutoff,
                    out, status, lo, hi):
     """Pairs [lo, hi) of ``collide_batch`` with one scratch workspace, in a plain loop:

@@ -89,7 +89,7 @@ import math
 from ..constants import (BC_FEAT, BC_MAX_LEVEL, BC_ROOT_ITERS, BC_ROOT_STOP, BOX, DIV_FLOOR,
                          EPA_REL_TOL, NO_DIRECTION, SUPPORT_TIE)
 from ..geometry import borrow_pose, meet
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from .cylinder_common import pre_outcome
 
 
@@ -426,7 +426,7 @@ def _apart_out(res, box_a, r_ab, t_ab, A, c, e, r, hc, gap, mx, my, mz):
     return -gap
 
 
-@njit_kernel
+@njit_separate
 def _box_cylinder_bound(sa, sb, r_ab, t_ab, scale, scratch, res):
     """The depth of a box and a cylinder (shape tuples sa, sb, one of each, B's pose
     r_ab, t_ab in A's frame) whose cores overlap, as the module doc says.  ``scratch``

@@ -8,12 +8,12 @@ import math
 
 from ..constants import CYLINDER, EPA_REL_TOL
 from ..geometry import borrow_pose, cylinder_inradius
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from .cylinder_common import (_cap_normal, _certified_out, _frame, _past_cap, _past_side,
                               _side_normal, pre_outcome)
 
 
-@njit_kernel
+@njit_separate
 def _capsule_cylinder_bound(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a capsule and a cylinder (either order), certified by the
     ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus the

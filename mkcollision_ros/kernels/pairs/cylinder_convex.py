@@ -86,7 +86,7 @@ from ..constants import (CYLINDER, EPA_REL_TOL, FAN_MAX_POINTS, GJK_FLAT_TOL, HC
                          HE_BALL_ITERS, HE_FAN_SLACK, HE_SUPPORT_TOL, PARALLEL_SIN, PRE_APART,
                          PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED)
 from ..geometry import borrow_args, cylinder_inradius
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from .cylinder_common import (_cap_normal, _cap_test, _certified_out, _cover, _frame,
                               _past_side, _side_normal, pre_outcome)
 from .normal_fan import (HE_FACES, HE_MAX_FACES, HE_V, _in_arc, _plane_feet, _planes_on_arc,
@@ -276,7 +276,7 @@ def _cyl_gjk(V, fl, nf, nvx, big_r, big_h, t0, t1, t2, need):
     return 0, 0.0, 0.0, 0.0, 0.0, np.uint64(0)
 
 
-@njit_kernel
+@njit_separate
 def collide_cylinder_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
                             res):
     """The exact depth of a cylinder and a hull's core with its fan stored (either
@@ -558,7 +558,7 @@ def _shadow_closest(ax, ay, bx, by):
     return t, ax + t * ex, ay + t * ey
 
 
-@njit_kernel
+@njit_separate
 def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of a convex hull and a cylinder (either order), certified by
     the ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus

@@ -59,7 +59,7 @@ import math
 
 from ..constants import AXES_SIN_MIN, CC_CROSS_RINGS, CC_NEWTON_ITERS, CC_RIMS, EPA_REL_TOL
 from ..geometry import borrow_args, cylinder_inradius, minkowski_core_xyz
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from .cylinder_common import (_apart_out, _cap_normal, _certified_out, _cover, _frame,
                               _newton_turn, _past_cap, _past_side, _side_normal, pre_outcome)
 
@@ -259,7 +259,7 @@ def _sides_apart(sa, sb, r_ab, t_ab, res):
     return 0.0
 
 
-@njit_kernel
+@njit_separate
 def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     """The core depth (> 0) of two cylinders, certified as in the module notes, with
     res (10,) = [depth, n (3), pa (3), pb (3)] on the cores in A's frame (n from A to

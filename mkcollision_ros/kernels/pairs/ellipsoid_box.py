@@ -65,7 +65,7 @@ import numpy as np
 from ..constants import (BE_EXACT, BE_POINT_ITERS, BE_ROOT_STOP, CC_NEWTON_ITERS, ELLIPSOID,
                          EPA_REL_TOL, PRE_EXACT, P_ROLL, ROLL_SHRINK)
 from ..geometry import borrow_pose, meet
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_kernel, njit_separate
 from .cylinder_common import _apart_out, _certified_out, _frame, gap_newton_step, pre_outcome
 
 
@@ -348,7 +348,7 @@ def _beyond_rim(res, side, r_ab, t_ab, ell, box, roll, cx, cy, cz, ux, uy, uz, v
     return 0.0, False
 
 
-@njit_kernel
+@njit_separate
 def _ellipsoid_box_bound(sa, sb, r_ab, t_ab, scale, stop, res):
     """The outcomes of the module notes for an ellipsoid and a box (either order; B's
     pose r_ab, t_ab in A's frame; ``stop`` (m, may be inf): a face plane proving the

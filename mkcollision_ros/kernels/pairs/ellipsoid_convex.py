@@ -75,7 +75,7 @@ from ..constants import (ELLIPSOID, FAN_MAX_POINTS, HE_BALL_ITERS, HE_BALL_TOL, 
                          HE_POLE_SEP, HE_PROGRESS_RTOL, HE_SUPPORT_TOL, HE_WEIGHT_FLOOR, PRE_APART,
                          PRE_EXACT, PRE_UNDECIDED, PRE_UNPROVED, P_ROLL)
 from ..geometry import borrow_args
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from ..simplex import _closest_simplex
 from .normal_fan import (HE_FACES, HE_MAX_FACES, HE_V, HE_X, _in_arc, _plane_feet, _planes_on_arc,
                          _root_right, _roots_mid, _vertex_top, face_apart_out, fan_run, fan_stored,
@@ -149,7 +149,7 @@ def _apart_out(res, side, r_ab, t_ab, pts, fl, nf, nvx, fx, fy, fz, mx, my, mz, 
                    gap)
 
 
-@njit_kernel
+@njit_separate
 def collide_ellipsoid_convex(sa, sb, verts, r_ab, t_ab, scale, overlap, stop, rows, roots,
                              res):
     """The exact depth of an ellipsoid's core and a hull with its fan stored (either

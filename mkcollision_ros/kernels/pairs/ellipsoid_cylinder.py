@@ -8,7 +8,7 @@ import math
 
 from ..constants import CC_NEWTON_ITERS, CYLINDER, EPA_REL_TOL, P_ROLL
 from ..geometry import borrow_pose, cylinder_inradius
-from ..jit import borrow, njit_inline, njit_kernel
+from ..jit import borrow, njit_inline, njit_separate
 from .cylinder_common import (_cap_test, _certified_out, _frame, _past_side, _side_normal,
                               gap_newton_step, pre_outcome)
 
@@ -23,7 +23,7 @@ def _k_point(cx, cy, cz, s00, s01, s02, s11, s12, roll, cs, sn, rs):
             cz - (s02 * cs + s12 * sn) / rs)
 
 
-@njit_kernel
+@njit_separate
 def _ellipsoid_cylinder_bound(sa, sb, r_ab, t_ab, scale, res):
     """The core depth (> 0) of an ellipsoid and a cylinder (either order), certified by
     the ball of cylinder_common.py, with res (10,) as _cylinder_cylinder_bound's, or minus

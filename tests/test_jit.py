@@ -334,3 +334,125 @@ def test_a_separate_kernel_is_called_by_its_callers_and_loaded_before_them(tmp_p
     assert linked["declares"] == {"mid": False, "top": False}
     for run in (first, cached, recompiled, linked):
         assert abs(run["value"] - expected) < 1e-12
+
+
+_SPEEDUP_KERNEL = '''
+import json, sys
+import numpy as np
+from mkcollision_ros.kernels import jit, numba_speedups
+
+
+@jit.njit_inline
+def inner(x, k):
+    y = 0.0
+    for i in range(k):
+        y = y * x + i if y < 10.0 else y - x
+    return y
+
+
+@jit.njit_inline
+def middle(v):
+    s = 0.0
+    for j in range(v.shape[0]):
+        s += inner(v[j], 3) - inner(v[j] + 1.0, 2)
+        if s > 5.0:
+            s = np.sqrt(s) + v.sum()
+    return s
+
+
+def outer(v):
+    a = middle(v)
+    b = middle(v[1:]) if v.shape[0] > 1 else 0.0
+    c = 0.0
+    for k in range(4):
+        c = c + inner(a, k) if c < 3.0 else c * 0.5
+    return a * b + c
+
+
+kernel = __import__("numba").njit(cache=False)(outer)
+value = kernel(np.arange(4.0))
+llvm = "\\n".join(kernel.inspect_llvm().values())
+print(json.dumps({"on": [numba_speedups.SSA_WHERE_NAMED, numba_speedups.QUICK_FLAG_COMPARISONS,
+                         numba_speedups.UNTYPED_IR_ONCE],
+                  "value": value, "llvm": llvm}))
+'''
+
+
+def _speedup_run(tmp_path, plain):
+    import json
+    import os
+    import subprocess
+    import sys
+    script = tmp_path / "speedups.py"
+    script.write_text(_SPEEDUP_KERNEL)
+    env = dict(os.environ, MKCOLLISION_PLAIN_NUMBA=plain)
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
+                         text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def _operations(llvm):
+    """The LLVM IR's instructions with every name, number and label left out, sorted:
+    what a function computes, whatever its values and blocks are called."""
+    import re
+    ops = []
+    for line in llvm.splitlines():
+        line = line.split(", !")[0].strip()
+        if not line or line.endswith(":") or line.startswith((";", "!", "source_filename")):
+            continue
+        line = re.sub(r'@"?[\w.$:<>]+"?', "@f", line)
+        line = re.sub(r'%"[^"]*"|%[\w.$]+', "%v", line)
+        line = re.sub(r'label %v|B\d+\S*', "L", line)
+        ops.append(line)
+    return sorted(ops)
+
+
+def test_the_compile_speedups_change_how_numba_compiles_not_what(tmp_path):
+    """kernels/numba_speedups: with the SSA and flag measures alone the LLVM IR is the
+    same text as numba's own; with the inliner's one untyped IR a function too it holds
+    the same instructions (names and labels aside); the value is the same in every
+    case, and each measure is installed only when asked for."""
+    plain = _speedup_run(tmp_path, "1")
+    ssa_flags = _speedup_run(tmp_path, "inliner")
+    every = _speedup_run(tmp_path, "0")
+    assert plain["on"] == [False, False, False]
+    assert ssa_flags["on"] == [True, True, False]
+    assert every["on"] == [True, True, True]
+    assert len(plain["llvm"]) > 5000 and "define" in plain["llvm"]
+    assert ssa_flags["llvm"] == plain["llvm"]
+    assert _operations(every["llvm"]) == _operations(plain["llvm"])
+    assert plain["value"] == ssa_flags["value"] == every["value"]
+
+
+def test_the_ssa_measure_renames_as_numba_does():
+    """numba_speedups' SSA over the blocks that name a variable gives the same blocks,
+    statement for statement, as numba's own pass on a function whose variables are
+    assigned in several blocks."""
+    import numba
+    from numba.core import compiler, ssa
+    from mkcollision_ros.kernels import numba_speedups
+
+    def f(n, x):
+        s = 0.0
+        t = 1.0
+        for i in range(n):
+            if x > i:
+                s = s + x
+                t = t * 0.5
+            else:
+                s = s - 1.0
+            if s > 3.0:
+                t = s
+        return s + t
+
+    def blocks_text(run):
+        func_ir = compiler.run_frontend(f)
+        blocks = run(func_ir.blocks)
+        return "\n".join(f"{label}: {stmt}" for label in sorted(blocks)
+                         for stmt in blocks[label].body)
+
+    assert numba_speedups.SSA_WHERE_NAMED
+    plain = numba_speedups._PLAIN_SSA_RUN
+    assert blocks_text(ssa._run_ssa) == blocks_text(plain)
+    assert "phi" in blocks_text(ssa._run_ssa)
+    assert numba.__version__ == "0.68.1"

@@ -36,8 +36,8 @@ numba's own per-file stamp is a hash of the file's content.  Setting
 ``NUMBA_CACHE_DIR`` overrides all of this (numba's own layout, per path).
 
 First compile: numba's inliner copies a callee's IR at every call site of an
-``njit_inline`` function (and again for each level of nesting).  Two measures keep that
-cheap, both active only while numba compiles and neither changing what is compiled:
+``njit_inline`` function (and again for each level of nesting).  These measures keep that
+cheap, each active only while numba compiles and none changing what is computed:
 - Python's cyclic collector: the copies are millions of short-lived objects, and its
   young-generation passes run every 700 allocations.  A listener on numba's
   ``numba:compile`` event (numba's documented event API) raises the thresholds to
@@ -52,6 +52,9 @@ cheap, both active only while numba compiles and neither changing what is compil
   (``tests/test_jit.py`` compares it with and without), and ``mpr_ws`` alone compiles
   in about two thirds of the time.  It is applied to numba 0.68.1 only, the pinned version
   whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
+- Three more of the same kind, in ``numba_speedups.py`` (imported here): SSA over the
+  blocks that name a variable, flag comparisons without properties, and one untyped IR
+  for every site that inlines a function.
 
 Separate kernels (``njit_separate``): numba links a copy of every called kernel's code
 into its caller's module, then optimises and generates machine code for the whole
@@ -93,6 +96,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numba
 from numba.core import caching, cgutils, event, types
 from numba.extending import intrinsic
+
+from . import numba_speedups  # noqa: F401 - installs the compile-time measures
 
 
 def _kernel_sources(here):

@@ -98,8 +98,8 @@ def test_cache_folder_covers_sub_packages_and_files_them_apart():
     assert sub(os.path.join(here, "pairs", "box_box.py")) == os.path.join(
         "mkcollision_ros", "kernels", "pairs")
 
-_NESTED = '''
-import sys
+# nested njit_inline helpers (the one-memo inliner's and numba_speedups' tests)
+_NESTED_KERNEL = '''
 import numpy as np
 from mkcollision_ros.kernels import jit
 
@@ -117,16 +117,25 @@ def middle(v):
     s = 0.0
     for j in range(v.shape[0]):
         s += inner(v[j], 3) - inner(v[j] + 1.0, 2)
+        if s > 5.0:
+            s = np.sqrt(s) + v.sum()
     return s
 
 
 def outer(v):
     a = middle(v)
     b = middle(v[1:]) if v.shape[0] > 1 else 0.0
-    return a * b + inner(a, 4)
+    c = 0.0
+    for k in range(4):
+        c = c + inner(a, k) if c < 3.0 else c * 0.5
+    return a * b + c
 
 
 kernel = __import__("numba").njit(cache=False)(outer)
+'''
+
+_NESTED = _NESTED_KERNEL + '''
+import sys
 print(jit.ONE_MEMO_INLINER, kernel(np.arange(4.0)))
 sys.stdout.write("\\n".join(kernel.inspect_llvm().values()))
 '''
@@ -336,40 +345,9 @@ def test_a_separate_kernel_is_called_by_its_callers_and_loaded_before_them(tmp_p
         assert abs(run["value"] - expected) < 1e-12
 
 
-_SPEEDUP_KERNEL = '''
-import json, sys
-import numpy as np
-from mkcollision_ros.kernels import jit, numba_speedups
-
-
-@jit.njit_inline
-def inner(x, k):
-    y = 0.0
-    for i in range(k):
-        y = y * x + i if y < 10.0 else y - x
-    return y
-
-
-@jit.njit_inline
-def middle(v):
-    s = 0.0
-    for j in range(v.shape[0]):
-        s += inner(v[j], 3) - inner(v[j] + 1.0, 2)
-        if s > 5.0:
-            s = np.sqrt(s) + v.sum()
-    return s
-
-
-def outer(v):
-    a = middle(v)
-    b = middle(v[1:]) if v.shape[0] > 1 else 0.0
-    c = 0.0
-    for k in range(4):
-        c = c + inner(a, k) if c < 3.0 else c * 0.5
-    return a * b + c
-
-
-kernel = __import__("numba").njit(cache=False)(outer)
+_SPEEDUP_KERNEL = _NESTED_KERNEL + '''
+import json
+from mkcollision_ros.kernels import numba_speedups
 value = kernel(np.arange(4.0))
 llvm = "\\n".join(kernel.inspect_llvm().values())
 print(json.dumps({"on": [numba_speedups.SSA_WHERE_NAMED, numba_speedups.QUICK_FLAG_COMPARISONS,

@@ -5,7 +5,7 @@ loads them in about a second and compiles nothing.  ``reporting(report)`` is a c
 manager that listens to numba's ``numba:compile`` event (numba's documented event API;
 it fires only when a kernel is compiled, never when it is loaded from the cache) and
 calls ``report(line)`` when an outermost compile starts, every HEARTBEAT_S while it
-lasts (one kernel takes minutes), and when it ends: which kernel, how long it took, how
+lasts (one kernel can take over a minute), and when it ends: which kernel, how long it took, how
 many of the expected kernels are done and an estimate of the time left.  The estimate
 comes from EXPECTED_SECONDS, the outermost compiles of ``warm_up_all`` (the pipeline's
 warm-up, what the node compiles at start, then the pair API's) in this process, with the
@@ -16,14 +16,18 @@ other kernels count as unknown.
 Two processes: ``sharing(report)`` splits a cold compile between this process and a
 helper process (``python -m mkcollision_ros.compile_progress --helper DIR``), for the
 machine's second core.  numba compiles a kernel together with every compiled kernel it
-calls, and loads a called kernel from its on-disk cache when it is there; so the helper
-compiles SHARED_KERNELS, independent subtrees of the call graph, into the cache while
-this process compiles the rest and loads those from the cache.  SHARED_KERNELS lists
-them in the order this process's warm-up reaches them; the helper takes them from the
-end, so the two meet in the middle whatever each kernel costs on the machine.  Every
-compile of a shared kernel, in either process, first claims it (a file created with
-O_EXCL in DIR): the claimant compiles it and then marks it done; the other process,
-needing it, waits for the mark and loads it from the cache, or skips it (the helper).
+calls, and loads a called kernel from its on-disk cache when it is there; so the two
+processes compile SHARED_KERNELS, subtrees of the call graph, into the cache, this one
+from the list's start (its lead) and the helper from its end, so they meet wherever
+each kernel's cost puts the middle; this process then runs the warm-up, which loads
+those and compiles the rest.  The list's end is GJK/EPA itself, about half of all the
+work, which the helper compiles from the top down; its start holds the two parts of
+GJK/EPA that compile reaches last (EPA, the GJK witness pass), done here before the
+helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's
+other parts in the reverse of the order its compile reaches them.  Every compile of a shared kernel, in either
+process, first claims it (a file created with O_EXCL in DIR): the claimant compiles it
+and then marks it done; the other process, needing it, waits for the mark and loads it
+from the cache, or skips it (the lead and the helper's own loop).
 The call graph has no cycles, so two processes never wait for each other.  The helper
 compiles a kernel by its signature, written in kernels' terms in ``compile_plan.py``
 (``--write-plan`` rewrites it from the cache; ``tests/test_compile_progress.py`` checks
@@ -43,15 +47,22 @@ from numba.core import event
 
 # outermost compiles of a cold warm-up: kernel name -> seconds (see the module docstring)
 EXPECTED_SECONDS = {
+    "_witness_by_gjk": 23,
+    "_epa": 15,
+    "find_pairs": 13,
+    "mpr_ws": 10,
+    "_manifold_block": 10,
+    "arbiter_step": 6,
+    "ellipsoid_exact": 3,
+    "ellipsoid_sampled": 1,
+    "split_pairs": 0,
+    "_fan_build": 2,
     "normalise_poses": 0,
     "_world_aabbs_block": 1,
-    "find_pairs": 15,
     "filter_pairs": 1,
-    "_collide_block": 91,
+    "_collide_block": 12,
     "_collide_batch": 0,
     "pair_shards": 0,
-    "static_grid": 2,
-    "static_pairs": 2,
 }
 # s between two "still compiling" lines during one long compile
 HEARTBEAT_S = 15.0
@@ -129,28 +140,36 @@ def reporting(report, expected=None, heartbeat=HEARTBEAT_S):
         event.unregister("numba:compile", listener)
 
 
-# compiled kernels ("module:name") whose subtrees the helper process may compile, in
-# the order Pipeline.warm_up reaches them (module docstring, "Two processes")
+# compiled kernels ("module:name") whose subtrees the two processes share, this one
+# from the start, the helper from the end (module docstring, "Two processes")
 SHARED_KERNELS = (
-    "mkcollision_ros.kernels.pairs.box_cylinder:_box_cylinder_bound",
-    "mkcollision_ros.kernels.pairs.cylinder_cylinder:_cylinder_cylinder_bound",
-    "mkcollision_ros.kernels.pairs.capsule_cylinder:_capsule_cylinder_bound",
-    "mkcollision_ros.kernels.pairs.ellipsoid_cylinder:_ellipsoid_cylinder_bound",
-    "mkcollision_ros.kernels.pairs.cylinder_convex:collide_cylinder_convex",
-    "mkcollision_ros.kernels.pairs.cylinder_convex:_cylinder_convex_ball_bound",
-    "mkcollision_ros.kernels.pairs.ellipsoid_box:_ellipsoid_box_bound",
-    "mkcollision_ros.kernels.pairs.ellipsoid_convex:collide_ellipsoid_convex",
-    "mkcollision_ros.kernels.mpr:mpr_ws",
-    "mkcollision_ros.kernels.gjk_epa:_caps_fallback",
-    "mkcollision_ros.kernels.epa:_epa",
+    # this process's lead: the two parts of GJK/EPA its compile reaches last, then
+    # kernels apart from GJK/EPA's subtree
     "mkcollision_ros.kernels.gjk:_witness_by_gjk",
+    "mkcollision_ros.kernels.epa:_epa",
+    "mkcollision_ros.kernels.broadphase:find_pairs",
+    "mkcollision_ros.kernels.mpr:mpr_ws",
+    "mkcollision_ros.kernels.manifold:_manifold_block",
+    "mkcollision_ros.kernels.persistence:arbiter_step",
     "mkcollision_ros.kernels.analytic:collide_analytic",
     "mkcollision_ros.kernels.ellipsoid:ellipsoid_exact",
     "mkcollision_ros.kernels.ellipsoid:ellipsoid_sampled",
     "mkcollision_ros.kernels.manifold:split_pairs",
-    "mkcollision_ros.kernels.manifold:_manifold_block",
-    "mkcollision_ros.kernels.persistence:arbiter_step",
     "mkcollision_ros.hull:_fan_build",
+    "mkcollision_ros.kernels.broadphase:static_grid",
+    "mkcollision_ros.kernels.broadphase:static_pairs",
+    # GJK/EPA's other parts, in the reverse of the order its compile reaches them
+    "mkcollision_ros.kernels.gjk_epa:_caps_fallback",
+    "mkcollision_ros.kernels.pairs.ellipsoid_convex:collide_ellipsoid_convex",
+    "mkcollision_ros.kernels.pairs.ellipsoid_box:_ellipsoid_box_bound",
+    "mkcollision_ros.kernels.pairs.cylinder_convex:_cylinder_convex_ball_bound",
+    "mkcollision_ros.kernels.pairs.cylinder_convex:collide_cylinder_convex",
+    "mkcollision_ros.kernels.pairs.ellipsoid_cylinder:_ellipsoid_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.capsule_cylinder:_capsule_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.box_cylinder:_box_cylinder_bound",
+    "mkcollision_ros.kernels.pairs.cylinder_cylinder:_cylinder_cylinder_bound",
+    # the helper's first: GJK/EPA itself, which reaches its parts from the top
+    "mkcollision_ros.kernels.gjk_epa:gjk_epa_ws",
 )
 # s between two looks for a mark of the other process
 POLL_S = 0.1
@@ -266,7 +285,7 @@ def sharing(report=print, jobs=2, plan=None):
         return
     if plan is None:
         full = planned_signatures()
-        plan = {key: full[key] for key in SHARED_KERNELS}
+        plan = {key: full[key] for key in SHARED_KERNELS if key in full}
     if _cached(plan):
         yield
         return
@@ -287,6 +306,9 @@ def sharing(report=print, jobs=2, plan=None):
         claims = _Claims(folder, plan, lambda: helper.poll() is None, report)
         claims.install()
         try:
+            # this process's lead, from the plan's start (the quiet lines: the
+            # reporting listener tells each compile already)
+            _compile_share(claims, list(plan), lambda line: None)
             yield
         finally:
             claims.remove()
@@ -309,6 +331,34 @@ def _read_plan(folder):
     return plan
 
 
+def _compile_share(claims, keys, say, go_on=lambda: True):
+    """Compile each kernel of ``keys`` in order that nobody has claimed, claiming it
+    first and marking it done after, while ``go_on()``; a line to ``say`` for each.
+    A kernel that does not compile for its planned signature (a stale plan) is left
+    to whichever warm-up reaches it."""
+    for key in keys:
+        if not go_on():
+            break
+        if claims.done(key) or not claims.claim(key):
+            continue
+        t0 = time.perf_counter()
+        disp = dispatcher(key)
+        hits = sum(disp.stats.cache_hits.values())
+        name = key.split(":")[1]
+        try:
+            claims.plain[key](claims.plan[key])
+        except Exception as err:  # noqa: BLE001 - a stale plan: the warm-up compiles it
+            say(f"could not compile {name} for compile_plan.py's signature "
+                f"({type(err).__name__}); left to the warm-up")
+            continue
+        finally:
+            claims.mark_done(key)
+        if sum(disp.stats.cache_hits.values()) > hits:
+            say(f"loaded {name} from the cache")
+        else:
+            say(f"compiled {name} in {time.perf_counter() - t0:.0f} s")
+
+
 def _helper(folder):
     """The helper process: compile the kernels of ``folder``'s plan from its end, each
     one nobody has claimed, until the parent process is gone or all are done."""
@@ -319,28 +369,8 @@ def _helper(folder):
 
     claims = _Claims(folder, _read_plan(folder), lambda: os.getppid() == parent, say)
     claims.install()
-    for key in reversed(list(claims.plan)):
-        if os.getppid() != parent:
-            break
-        if claims.done(key) or not claims.claim(key):
-            continue
-        t0 = time.perf_counter()
-        disp = dispatcher(key)
-        hits = sum(disp.stats.cache_hits.values())
-        name = key.split(":")[1]
-        try:
-            claims.plain[key](claims.plan[key])
-        except Exception as err:  # noqa: BLE001 - a stale plan: the other process compiles it
-            say(f"could not compile {name} for compile_plan.py's signature "
-                f"({type(err).__name__}); left to the first process")
-            continue
-        finally:
-            claims.mark_done(key)
-        if sum(disp.stats.cache_hits.values()) > hits:
-            say(f"loaded {name} from the cache")
-        else:
-            say(f"compiled {name} in {time.perf_counter() - t0:.0f} s")
-
+    _compile_share(claims, reversed(list(claims.plan)), say,
+                   lambda: os.getppid() == parent)
 
 def warm_up_all(report=print, jobs=2):
     """Compile (or load from the cache) every kernel any entry point reaches: the

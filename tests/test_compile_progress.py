@@ -191,8 +191,9 @@ def _toy_env(tmp_path):
 
 
 def test_two_processes_share_a_cold_compile_and_compile_each_kernel_once(tmp_path):
-    """``sharing``: the helper process and this one split the planned kernels, each
-    compiled by one of them only; the other loads it from the cache."""
+    """``sharing``: the helper process and this one split the planned kernels, this one
+    from the plan's start and the helper from its end, each compiled by one of them
+    only; the other loads it from the cache."""
     import subprocess
     import sys
     env = dict(_toy_env(tmp_path), TMPDIR=str(tmp_path))
@@ -200,9 +201,9 @@ def test_two_processes_share_a_cold_compile_and_compile_each_kernel_once(tmp_pat
                        capture_output=True, text=True, check=True, timeout=300)
     value, here, helper = r.stdout.splitlines()
     assert float(value) == 4.0
-    # this process compiles top and leaf_a (reached first), the helper leaf_b (the plan's
-    # end), which this process then loads from the cache
-    assert here.split(",") == ["top", "leaf_a"], (here, helper)
+    # this process compiles leaf_a (the plan's start, its lead) and then top, the helper
+    # leaf_b (the plan's end), which this process then loads from the cache
+    assert here.split(",") == ["leaf_a", "top"], (here, helper)
     assert helper.split("|") == ["(second process) compiled leaf_b in 0 s"], helper
 
 

@@ -77,7 +77,7 @@ SECTIONS = (
         "run, and are reported here."),
     Section(
         "startup", "Start-up",
-        ("bench/startup.py",),
+        ("bench/startup.py", "--cold-node", "--one-process"),
         "Each row a fresh process; an empty cache is a new, empty `XDG_CACHE_HOME`, so "
         "nothing compiled before is seen.  Goal: the node's first answer within 60 s of "
         "its start from an empty cache, within 1 s once cached.  `bench/compile_time.py` "

@@ -2,6 +2,8 @@
 cold compile compiles by name (written by ``python -m mkcollision_ros.compile_progress
 --write-plan``; numba type reprs)."""
 SIGNATURES = {
+    'mkcollision_ros.kernels.gjk:_gjk':
+        "(Tuple((int64, Array(float64, 1, 'C', False, aligned=True), int64, int64)), Tuple((int64, Array(float64, 1, 'C', False, aligned=True), int64, int64)), Array(float64, 2, 'C', False, aligned=True), Array(float64, 2, 'C', False, aligned=True), Array(float64, 1, 'C', False, aligned=True), float64, Tuple((Array(float64, 2, 'C', False, aligned=True), Array(float64, 1, 'C', False, aligned=True), Array(uint64, 2, 'C', False, aligned=True))), float64, bool, bool)",
     'mkcollision_ros.kernels.gjk:_witness_by_gjk':
         "(Tuple((int64, Array(float64, 1, 'C', False, aligned=True), int64, int64)), Tuple((int64, Array(float64, 1, 'C', False, aligned=True), int64, int64)), Array(float64, 2, 'C', False, aligned=True), Array(float64, 2, 'C', False, aligned=True), Array(float64, 1, 'C', False, aligned=True), float64, Tuple((Array(float64, 2, 'C', False, aligned=True), Array(float64, 1, 'C', False, aligned=True), Array(uint64, 2, 'C', False, aligned=True))), Array(float64, 1, 'C', False, aligned=True))",
     'mkcollision_ros.kernels.epa:_epa':

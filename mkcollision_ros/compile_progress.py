@@ -21,9 +21,9 @@ processes compile SHARED_KERNELS, subtrees of the call graph, into the cache, th
 from the list's start (its lead) and the helper from its end, so they meet wherever
 each kernel's cost puts the middle; this process then runs the warm-up, which loads
 those and compiles the rest.  The list's end is GJK/EPA itself, about half of all the
-work, which the helper compiles from the top down; its start holds the two parts of
-GJK/EPA that compile reaches last (EPA, the GJK witness pass), done here before the
-helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's
+work, which the helper compiles from the top down; its start holds the GJK loop and
+the two parts of GJK/EPA that compile reaches last (EPA, the GJK witness pass), done
+here before the helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's
 other parts in the reverse of the order its compile reaches them.  Every compile of a shared kernel, in either
 process, first claims it (a file created with O_EXCL in DIR): the claimant compiles it
 and then marks it done; the other process, needing it, waits for the mark and loads it
@@ -47,16 +47,14 @@ from numba.core import event
 
 # outermost compiles of a cold warm-up: kernel name -> seconds (see the module docstring)
 EXPECTED_SECONDS = {
-    "_witness_by_gjk": 23,
-    "_epa": 15,
-    "find_pairs": 13,
+    "_gjk": 19,
+    "_witness_by_gjk": 0,
+    "_epa": 13,
+    "find_pairs": 12,
     "mpr_ws": 10,
     "_manifold_block": 10,
-    "arbiter_step": 6,
-    "ellipsoid_exact": 3,
-    "ellipsoid_sampled": 1,
-    "split_pairs": 0,
-    "_fan_build": 2,
+    "arbiter_step": 5,
+    "ellipsoid_exact": 2,
     "normalise_poses": 0,
     "_world_aabbs_block": 1,
     "filter_pairs": 1,
@@ -143,8 +141,9 @@ def reporting(report, expected=None, heartbeat=HEARTBEAT_S):
 # compiled kernels ("module:name") whose subtrees the two processes share, this one
 # from the start, the helper from the end (module docstring, "Two processes")
 SHARED_KERNELS = (
-    # this process's lead: the two parts of GJK/EPA its compile reaches last, then
-    # kernels apart from GJK/EPA's subtree
+    # this process's lead: the GJK loop and the two parts of GJK/EPA its compile
+    # reaches last, then kernels apart from GJK/EPA's subtree
+    "mkcollision_ros.kernels.gjk:_gjk",
     "mkcollision_ros.kernels.gjk:_witness_by_gjk",
     "mkcollision_ros.kernels.epa:_epa",
     "mkcollision_ros.kernels.broadphase:find_pairs",

@@ -53,13 +53,15 @@ saves: each try is passes over the hull's vertices.
 """
 import math
 
+import numpy as np
+
 from .constants import (EPA_DEGEN_TOL, EPA_FACE_EVALS, EPA_WITNESS_SHIFT, GJK_ABS_TOL,
                         GJK_FACE_TOL, GJK_MAX_ITERS, GJK_POLISH_TOL, GJK_REL_TOL)
 from .geometry import borrow_args, meet, minkowski_core_xyz
 from .gjk_epa_workspace import (_FS_ROWS, _L3, _LAM, _LAMP, _PK, _PN, _PW, _T_D, _T_MIN_D,
                                 _T_MIN_W, _T_SHIFT, _T_VPREV, _T_W, _T_WA, _T_WB, _VOL, _VV, _W,
                                 _WA, _WAP, _WB, _WBP, _WP, _dot, borrow_gjk_workspace)
-from .jit import borrow, njit_inline, njit_kernel, njit_separate
+from .jit import borrow, njit_kernel, njit_separate
 from .polish_crease import _kink_polish
 from .polish_faces import _face_polish, _hull_polish
 from .polish_newton import _newton_min_support
@@ -78,9 +80,11 @@ _GJK_STALL = 5       # no progress in floating point (a sliver simplex) with the
                      # gap still above GJK_POLISH_TOL |v|^2: apart is not proved
 
 
-@njit_inline
+@njit_separate
 def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
-    """GJK loop on the cores (geometry.minkowski_core_xyz).
+    """GJK loop on the cores (geometry.minkowski_core_xyz).  A separate kernel (jit.py),
+    called once a pair by gjk_epa_ws and by _witness_by_gjk: inlined, its ~4,700
+    statements were compiled twice.
 
     Writes into the workspace ``ws``: W, WA, WB float64 (4, 3), the simplex of A - B and
     the support points of A and B (A's frame), lam (4,) barycentric weights, v (3,) the
@@ -313,7 +317,8 @@ def _witness_by_gjk(sa, sb, verts, r_ab, t_ab, scale, ws, res):
     t2 = ws[0][_T_SHIFT]
     for c in range(3):
         t2[c] = t_ab[c] + sh * res[1 + c]
-    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, False, False)
+    n, it, flag, _ = _gjk(sa, sb, verts, r_ab, t2, scale, ws, math.inf, np.bool_(False),
+                          np.bool_(False))
     if flag != _GJK_APART and flag != _GJK_STALL:
         return 0
     fs, fv = ws[0], ws[1]

@@ -1,33 +1,33 @@
 """Progress of numba's first compile, for people watching a terminal.
 
-A first start compiles the kernels for minutes (README, "First-run cost"); a cached start
-loads them in about a second and compiles nothing.  ``reporting(report)`` is a context
-manager that listens to numba's ``numba:compile`` event (numba's documented event API;
-it fires only when a kernel is compiled, never when it is loaded from the cache) and
-calls ``report(line)`` when an outermost compile starts, every HEARTBEAT_S while it
-lasts (one kernel can take over a minute), and when it ends: which kernel, how long it took, how
-many of the expected kernels are done and an estimate of the time left.  The estimate
-comes from EXPECTED_SECONDS, the outermost compiles of ``warm_up_all`` (the pipeline's
-warm-up, what the node compiles at start, then the pair API's) in this process, with the
-compile shared by two (below), measured in an empty cache on the project's 2-core
-machine (``python -m mkcollision_ros.compile_progress --measure`` measures them again);
-other kernels count as unknown.
+A first start compiles the kernels for minutes (README, "First-run cost"); a cached
+start loads them in about a second and compiles nothing.  ``reporting(report)`` is a
+context manager that listens to numba's ``numba:compile`` event (numba's documented
+event API; it fires only when a kernel is compiled, never when it is loaded from the
+cache) and calls ``report(line)`` when an outermost compile starts, every HEARTBEAT_S
+while it lasts (one kernel can take over a minute), and when it ends: which kernel, how
+long it took, how many of the expected kernels are done and an estimate of the time
+left.  The estimate comes from EXPECTED_SECONDS, the outermost compiles of
+``warm_up_all`` (the pipeline's warm-up, what the node compiles at start, then the pair
+API's) in this process, with the compile shared by two (below), measured in an empty
+cache on the project's 2-core machine (``python -m mkcollision_ros.compile_progress
+--measure`` measures them again); other kernels count as unknown.
 
 Two processes: ``sharing(report)`` splits a cold compile between this process and a
 helper process (``python -m mkcollision_ros.compile_progress --helper DIR``), for the
 machine's second core.  numba compiles a kernel together with every compiled kernel it
 calls, and loads a called kernel from its on-disk cache when it is there; so the two
 processes compile SHARED_KERNELS, subtrees of the call graph, into the cache, this one
-from the list's start (its lead) and the helper from its end, so they meet wherever
-each kernel's cost puts the middle; this process then runs the warm-up, which loads
-those and compiles the rest.  The list's end is GJK/EPA itself, about half of all the
-work, which the helper compiles from the top down; its start holds the GJK loop and
-the two parts of GJK/EPA that compile reaches last (EPA, the GJK witness pass), done
-here before the helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's
-other parts in the reverse of the order its compile reaches them.  Every compile of a shared kernel, in either
-process, first claims it (a file created with O_EXCL in DIR): the claimant compiles it
-and then marks it done; the other process, needing it, waits for the mark and loads it
-from the cache, or skips it (the lead and the helper's own loop).
+from the list's start (its lead) and the helper from its end, so they meet wherever each
+kernel's cost puts the middle; this process then runs the warm-up, which loads those and
+compiles the rest.  The list's end is GJK/EPA itself, about half of all the work, which
+the helper compiles from the top down; its start holds the GJK loop and the two parts of
+GJK/EPA that compile reaches last (EPA, the GJK witness pass), done here before the
+helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's other
+parts in the reverse of the order its compile reaches them.  Every compile of a shared
+kernel, in either process, first claims it (a file created with O_EXCL in DIR): the
+claimant compiles it and then marks it done; the other process, needing it, waits for
+the mark and loads it from the cache, or skips it (the lead and the helper's own loop).
 The call graph has no cycles, so two processes never wait for each other.  The helper
 compiles a kernel by its signature, written in kernels' terms in ``compile_plan.py``
 (``--write-plan`` rewrites it from the cache; ``tests/test_compile_progress.py`` checks
@@ -370,6 +370,7 @@ def _helper(folder):
     claims.install()
     _compile_share(claims, reversed(list(claims.plan)), say,
                    lambda: os.getppid() == parent)
+
 
 def warm_up_all(report=print, jobs=2):
     """Compile (or load from the cache) every kernel any entry point reaches: the

@@ -6,10 +6,11 @@ time numba spent compiling each kernel, from numba's ``numba:compile`` events; w
     PYTHONPATH=. .venv/bin/python bench/compile_time.py [--top 30] [--all]
 
 "own s" is a kernel's compile less that of the kernels it calls that are compiled as
-functions of their own (nested ``numba:compile`` events); what is inlined into it
-(``njit_inline``) counts as its own.  A kernel listed with more than one compile was
-typed for more than one signature (e.g. an integer argument seen once as a literal
-constant).  Takes 4-10 minutes; run it with nothing else on the machine.
+functions of their own (nested ``numba:compile`` events), ``njit_inline`` helpers
+included: LLVM's work on their inlined copies counts as the caller's own.  A kernel
+listed with more than one compile was typed for more than one signature (e.g. an
+integer argument seen once as a literal constant).  Takes 2-4 minutes; run it with
+nothing else on the machine.
 """
 import argparse
 import os

@@ -98,7 +98,7 @@ def test_cache_folder_covers_sub_packages_and_files_them_apart():
     assert sub(os.path.join(here, "pairs", "box_box.py")) == os.path.join(
         "mkcollision_ros", "kernels", "pairs")
 
-# nested njit_inline helpers (the one-memo inliner's and numba_speedups' tests)
+# nested njit_inline helpers (the inlining test and numba_speedups' tests)
 _NESTED_KERNEL = '''
 import numpy as np
 from mkcollision_ros.kernels import jit
@@ -135,41 +135,43 @@ kernel = __import__("numba").njit(cache=False)(outer)
 '''
 
 _NESTED = _NESTED_KERNEL + '''
-import sys
-print(jit.ONE_MEMO_INLINER, kernel(np.arange(4.0)))
-sys.stdout.write("\\n".join(kernel.inspect_llvm().values()))
+import json
+value = kernel(np.arange(4.0))
+llvm = "\\n".join(kernel.inspect_llvm().values())
+inner, middle = inner.py_func, middle.py_func       # the helpers as plain Python
+print(json.dumps({"value": value, "python": outer(np.arange(4.0)), "llvm": llvm}))
 '''
 
 
-def test_the_one_memo_inliner_emits_the_same_llvm_ir(tmp_path):
-    """jit._one_memo_inliner changes how numba copies an inlined callee's IR, never what
-    is compiled: nested njit_inline helpers give the same LLVM IR text and the same
-    value with it and without it (MKCOLLISION_PLAIN_INLINER=1)."""
+def test_njit_inline_helpers_leave_no_call_and_no_copy_in_their_caller(tmp_path):
+    """jit.py, "Inlining": LLVM puts nested njit_inline helpers into the optimised
+    caller, which neither calls nor defines them, and computes what Python does."""
+    import json
     import os
+    import re
     import subprocess
     import sys
 
     script = tmp_path / "nested.py"
     script.write_text(_NESTED)
-
-    def run(plain):
-        env = dict(os.environ, MKCOLLISION_PLAIN_INLINER="1" if plain else "0")
-        return subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
-                              text=True, check=True).stdout
-
-    with_memo, without = run(False), run(True)
-    assert with_memo.split("\n", 1)[0].startswith("True ")
-    assert without.split("\n", 1)[0].startswith("False ")
-    assert with_memo.split("\n", 1)[0].split()[1] == without.split("\n", 1)[0].split()[1]
-    assert len(with_memo) > 2000 and "define" in with_memo
-    assert with_memo.split("\n", 1)[1] == without.split("\n", 1)[1]
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))   # the kernels' apart
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         env=env, check=True).stdout
+    run = json.loads(out.strip().splitlines()[-1])
+    expected = run["python"]
+    assert abs(run["value"] - expected) <= 1e-12 * max(1.0, abs(expected))
+    llvm = run["llvm"]
+    assert re.search(r"^define .*@\S*5outer", llvm, re.M)
+    helpers = re.compile(r"@\S*(5inner|6middle)")
+    assert not [line for line in llvm.splitlines()
+                if helpers.search(line) and ("call" in line or line.startswith("define"))]
 
 
 def _compiled_kernel_calls_with_constants():
-    """(file, line, kernel, argument) for every call of a compiled, not inlined kernel
-    (njit_kernel, njit_separate, njit_parallel) inside kernels/ whose argument is an integer or boolean
-    constant: numba types such an argument as a literal and compiles the callee once
-    per value (jit.py, "Literal")."""
+    """(file, line, kernel, argument) for every call of a kernel (njit_kernel,
+    njit_separate, njit_parallel, njit_inline) inside kernels/ whose argument is an
+    integer or boolean constant: numba types such an argument as a literal and compiles
+    the callee once per value (jit.py, "Literal")."""
     import ast
     import pathlib
     root = pathlib.Path(jit.__file__).parent
@@ -177,7 +179,7 @@ def _compiled_kernel_calls_with_constants():
     compiled = {n.name for t in trees.values() for n in ast.walk(t)
                 if isinstance(n, ast.FunctionDef) and n.decorator_list
                 and ast.unparse(n.decorator_list[0])
-                in ("njit_kernel", "njit_separate", "njit_parallel")}
+                in ("njit_kernel", "njit_separate", "njit_parallel", "njit_inline")}
     found = []
     for path, tree in trees.items():
         # calls from compiled code only (a call from Python passes a plain int64)
@@ -350,8 +352,7 @@ import json
 from mkcollision_ros.kernels import numba_speedups
 value = kernel(np.arange(4.0))
 llvm = "\\n".join(kernel.inspect_llvm().values())
-print(json.dumps({"on": [numba_speedups.SSA_WHERE_NAMED, numba_speedups.QUICK_FLAG_COMPARISONS,
-                         numba_speedups.UNTYPED_IR_ONCE],
+print(json.dumps({"on": [numba_speedups.SSA_WHERE_NAMED, numba_speedups.QUICK_FLAG_COMPARISONS],
                   "value": value, "llvm": llvm}))
 '''
 
@@ -363,43 +364,26 @@ def _speedup_run(tmp_path, plain):
     import sys
     script = tmp_path / "speedups.py"
     script.write_text(_SPEEDUP_KERNEL)
-    env = dict(os.environ, MKCOLLISION_PLAIN_NUMBA=plain)
+    env = dict(os.environ, MKCOLLISION_PLAIN_NUMBA=plain,
+               NUMBA_CACHE_DIR=str(tmp_path / "cache"))      # the kernels' cache apart
     out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
                          text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
-def _operations(llvm):
-    """The LLVM IR's instructions with every name, number and label left out, sorted:
-    what a function computes, whatever its values and blocks are called."""
-    import re
-    ops = []
-    for line in llvm.splitlines():
-        line = line.split(", !")[0].strip()
-        if not line or line.endswith(":") or line.startswith((";", "!", "source_filename")):
-            continue
-        line = re.sub(r'@"?[\w.$:<>]+"?', "@f", line)
-        line = re.sub(r'%"[^"]*"|%[\w.$]+', "%v", line)
-        line = re.sub(r'label %v|B\d+\S*', "L", line)
-        ops.append(line)
-    return sorted(ops)
-
-
 def test_the_compile_speedups_change_how_numba_compiles_not_what(tmp_path):
-    """kernels/numba_speedups: with the SSA and flag measures alone the LLVM IR is the
-    same text as numba's own; with the inliner's one untyped IR a function too it holds
-    the same instructions (names and labels aside); the value is the same in every
-    case, and each measure is installed only when asked for."""
+    """kernels/numba_speedups: with the SSA and flag measures the LLVM IR is the same
+    text as numba's own and the value is the same; each measure is installed only when
+    asked for."""
     plain = _speedup_run(tmp_path, "1")
-    ssa_flags = _speedup_run(tmp_path, "inliner")
+    ssa_only = _speedup_run(tmp_path, "flags")
     every = _speedup_run(tmp_path, "0")
-    assert plain["on"] == [False, False, False]
-    assert ssa_flags["on"] == [True, True, False]
-    assert every["on"] == [True, True, True]
+    assert plain["on"] == [False, False]
+    assert ssa_only["on"] == [True, False]
+    assert every["on"] == [True, True]
     assert len(plain["llvm"]) > 5000 and "define" in plain["llvm"]
-    assert ssa_flags["llvm"] == plain["llvm"]
-    assert _operations(every["llvm"]) == _operations(plain["llvm"])
-    assert plain["value"] == ssa_flags["value"] == every["value"]
+    assert every["llvm"] == plain["llvm"] == ssa_only["llvm"]
+    assert plain["value"] == ssa_only["value"] == every["value"]
 
 
 def test_the_ssa_measure_renames_as_numba_does():

@@ -10,9 +10,9 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 KERNEL_OK = {"numpy", "numba", "math", "__future__"}
 # jit.py and numba_speedups.py, the compile machinery, alone may use the standard library:
 # to place numba's cache, to raise the garbage collector's thresholds while numba
-# compiles, for the inliner's one-memo copy, to load a separate kernel's module and for
-# the compile-time measures (see their docstrings)
-JIT_EXTRA = {"os", "hashlib", "gc", "copy", "threading", "concurrent", "importlib"}
+# compiles, to load a separate kernel's module and for the compile-time measures (see
+# their docstrings)
+JIT_EXTRA = {"os", "hashlib", "gc", "threading", "concurrent", "importlib"}
 JIT_FILES = {"jit.py", "numba_speedups.py"}
 FORBIDDEN_CORE = {"rclpy", "rerun", "coal", "mujoco", "fcl", "pybullet", "mkcollision_msgs",
                   "geometry_msgs", "visualization_msgs", "msg_adapters", "std_msgs"}

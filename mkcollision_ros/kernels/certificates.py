@@ -177,21 +177,22 @@ def _ball_certified(sa, sb, r_ab, t_ab, hmin, nx, ny, nz, ax, ay, az, bx, by, bz
     point) does 502, 708 of 992 ellipsoid-cylinder (598), 847 of 988
     ellipsoid-ellipsoid."""
     sa, sb, r_ab, t_ab = borrow_pose(sa, sb, r_ab, t_ab)
-    if _core_inradius(0, sa, sb, r_ab, t_ab, bx, by, bz) >= hmin:
+    if _core_inradius(np.int64(0), sa, sb, r_ab, t_ab, bx, by, bz) >= hmin:
         return True
-    if _core_inradius(1, sa, sb, r_ab, t_ab, ax, ay, az) >= hmin:
+    if _core_inradius(np.int64(1), sa, sb, r_ab, t_ab, ax, ay, az) >= hmin:
         return True
     if sa[0] != ELLIPSOID and sb[0] != ELLIPSOID:
         return False
-    qax, qay, qaz, rha = _rolling_ball(0, sa, sb, r_ab, ax, ay, az, nx, ny, nz)
-    qbx, qby, qbz, rhb = _rolling_ball(1, sa, sb, r_ab, bx, by, bz, -nx, -ny, -nz)
+    qax, qay, qaz, rha = _rolling_ball(np.int64(0), sa, sb, r_ab, ax, ay, az, nx, ny, nz)
+    qbx, qby, qbz, rhb = _rolling_ball(np.int64(1), sa, sb, r_ab, bx, by, bz, -nx, -ny, -nz)
     ex, ey, ez = qax - qbx, qay - qby, qaz - qbz
     if rha + rhb - math.sqrt(ex * ex + ey * ey + ez * ez) >= hmin:
         return True
-    if sa[0] == ELLIPSOID and rha + _core_depth(1, sa, sb, r_ab, t_ab, qax, qay, qaz) >= hmin:
+    if (sa[0] == ELLIPSOID
+            and rha + _core_depth(np.int64(1), sa, sb, r_ab, t_ab, qax, qay, qaz) >= hmin):
         return True
     return (sb[0] == ELLIPSOID
-            and rhb + _core_depth(0, sa, sb, r_ab, t_ab, qbx, qby, qbz) >= hmin)
+            and rhb + _core_depth(np.int64(0), sa, sb, r_ab, t_ab, qbx, qby, qbz) >= hmin)
 
 
 @njit_inline

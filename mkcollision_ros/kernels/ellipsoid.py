@@ -134,7 +134,8 @@ def _unit_or_z(v):
     o = np.empty(3)
     n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     if n > 0.0:
-        o[:] = v / n
+        for m in range(3):
+            o[m] = v[m] / n
     else:
         o[0] = 0.0
         o[1] = 0.0
@@ -349,7 +350,8 @@ def ellipsoid_sampled(sa, sb, r_ab, t_ab, n_subdiv, out):
                 d2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2]
                 if d2 < best:
                     best = d2
-                    best_p[:] = q
+                    for m in range(3):
+                        best_p[m] = q[m]
         if best <= 1.0:
             break   # contact found: stop at the end of this face
     gap = math.sqrt(best) - 1.0

@@ -264,11 +264,11 @@ def _edge_of(F, g, a, b):
 def _trace_polytope(fs, V, F, alive, nv, nf):
     """Record EPA's polytope (vertices V[:nv], the live faces among F[:nf]) in fs's
     trace region (TR_EPA, gjk_epa.py, "Trace")."""
-    nlive = 0
+    nlive = np.int64(0)
     for f in range(nf):
         if alive[f]:
             nlive += 1
-    r = trace_open(fs, _FS_ROWS, TR_EPA, nv, nlive)
+    r = trace_open(fs, np.int64(_FS_ROWS), np.int64(TR_EPA), nv, nlive)
     if r < 0:
         return
     for i in range(nv):
@@ -391,7 +391,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
     p_planes = False
     p_cap = 0.0
     p_h = 0.0
-    p_fail = -1                         # a face that failed its last test
+    p_fail = np.int64(-1)               # a face that failed its last test
     # the test of a face normal (_face_polish): from a gain of EPA_FACE_TOL * scale, at
     # most EPA_FACE_EVALS supports
     face_left = EPA_FACE_EVALS if _epa_face_pair(sa[0], sb[0]) else 0
@@ -465,7 +465,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                 p_planes = True
                 p_cap = fs[_T_FACE_CAP, 0]
                 p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
-                p_fail = -1
+                p_fail = np.int64(-1)
         if pend:
             p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T_MIN_D], p_h, p_planes,
                                        p_cap, p_fail)
@@ -480,7 +480,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
             # goes on, and they are tried once more 100x closer.  Two cylinders with
             # the normal near neither crease: Newton's method too (two_cyl; see
             # _smooth_pair); another cylinder pair keeps its tries for later steps
-            kc = _kink_side(sa, sb, r_ab, d[0], d[1], d[2], False)
+            kc = _kink_side(sa, sb, r_ab, d[0], d[1], d[2], np.bool_(False))
             # an ellipsoid and a box, near none of the box's creases: Newton's method in
             # a vertex's region (_vertex_cap), unless a minimum is pending already
             vtx = eb and kc == -1 and not pend
@@ -509,7 +509,7 @@ def _epa(sa, sb, verts, r_ab, t_ab, scale, ws):
                     p_cap = cap
                     p_h = _pending_bound(sa, sb, r_ab, t_ab, fs, tol)
                     p_fail = _polish_is_global(V, F, FN, FD, nf, fs[_T_MIN_D], p_h,
-                                               p_planes, p_cap, -1)
+                                               p_planes, p_cap, np.int64(-1))
                     if p_fail < 0:
                         _take_polished(fs, d, w, wa, wb)
                         polished = True

@@ -351,12 +351,10 @@ def minkowski_core_xyz(sa, sb, verts, r_ab, t_ab, dx, dy, dz):
     B's core (both in A's frame) as six floats (ax, ay, az, bx, by, bz); the Minkowski
     difference point is a - b.
 
-    Two functions, not one with a ``core`` flag: numba inlines IR before it prunes a
-    branch on a constant flag, so every inlined copy would carry both branches (six
-    shape switches, where GJK and EPA use two), and the inliner copies a callee's IR
-    once per call site, which would make the first compile half again as long.  For the
-    same reason the two write out their frame maps rather than share an inlined helper:
-    each level of inlining is copied again at every site above it."""
+    Two functions, not one with a ``core`` flag: each is inlined at every site of GJK,
+    EPA and MPR (jit.py, "Inlining"), and one with both would hand LLVM six shape
+    switches to optimise at each site, where GJK and EPA use two, before it could drop
+    the unused ones."""
     ex = -(r_ab[0, 0] * dx + r_ab[1, 0] * dy + r_ab[2, 0] * dz)
     ey = -(r_ab[0, 1] * dx + r_ab[1, 1] * dy + r_ab[2, 1] * dz)
     ez = -(r_ab[0, 2] * dx + r_ab[1, 2] * dy + r_ab[2, 2] * dz)

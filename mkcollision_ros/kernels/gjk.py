@@ -130,9 +130,9 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
         WB[0, c] = wb[c]
         v[c] = w[c]
     lam[0] = 1.0
-    n = 1
+    n = np.int64(1)
     if trace_on:
-        trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
+        trace_rows(fs, np.int64(_FS_ROWS), np.int64(TR_GJK), W, n)
     if tn > 0.0:
         # the centre line may already separate them: h_{A-B}(t/|t|) < -stop (the first
         # support is along it; MuJoCo's GJK makes the same test before its first step)
@@ -205,7 +205,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
                 # shapes are proved to touch; else, at GJK_POLISH_TOL, Newton's method
                 # where h is smooth.  Apart, h is convex and any local minimum below
                 # zero is the global one, so no basin test is needed
-                kc = _kink_side(sa, sb, r_ab, d[0] * inv, d[1] * inv, d[2] * inv, True)
+                kc = _kink_side(sa, sb, r_ab, d[0] * inv, d[1] * inv, d[2] * inv, np.bool_(True))
                 k_pol = 0
                 if kc >= 0:
                     crease_early = False
@@ -248,7 +248,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
         if n == 4:
             flag = _GJK_OVERLAP
             if trace_on:
-                trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
+                trace_rows(fs, np.int64(_FS_ROWS), np.int64(TR_GJK), W, n)
             break
         vv_new = _dot(v, v)
         if vv_new >= vv:
@@ -270,7 +270,7 @@ def _gjk(sa, sb, verts, r_ab, t_ab, scale, ws, stop, polish, trace_on):
                 flag = _GJK_APART
             break
         if trace_on:
-            trace_rows(fs, _FS_ROWS, TR_GJK, W, n)
+            trace_rows(fs, np.int64(_FS_ROWS), np.int64(TR_GJK), W, n)
         vv = vv_new
     return n, it, flag, 0.0
 

@@ -213,7 +213,7 @@ def gjk_epa_ws(sa, sb, verts, r_ab, t_ab, out, ws, cutoff):
     iterate = False
     if trace_on:
         iterate = ws[0][_FS_ROWS + 1, 0] > 0.0
-        trace_reset(ws[0], _FS_ROWS)
+        trace_reset(ws[0], np.int64(_FS_ROWS))
     _fallback_normal(t_ab, nrm)
     for c in range(3):
         pa[c] = 0.0

@@ -16,10 +16,22 @@ pair's time (perf: ``lock incq`` in NRT_incref).  Two tools remove them:
 calls return at once), used by the batch kernels on their arguments and scratch
 buffers; the owner must outlive the view, which ``keep_alive(owner)`` after the last use
 guarantees (numba frees a variable after its last use).  A borrowed array must never
-be returned to Python.  ``njit_inline`` (numba-IR inlining) is the policy of small
-helpers called once per support point or per pair, and of the per-pair dispatch
-inside the batch loop (narrowphase.collide_world_ws down to the closed-form switch);
-it makes the first compile longer and is kept to those.
+be returned to Python.  ``njit_inline`` is the policy of small helpers called once per
+support point or per pair, and of the per-pair dispatch inside the batch loop
+(narrowphase.collide_world_ws down to the closed-form switch); see "Inlining".
+
+Inlining: an ``njit_inline`` kernel is typed and lowered by numba once per signature,
+like any kernel, and marked ``alwaysinline`` for LLVM (numba's ``forceinline``), whose
+inliner then puts its code into every caller that links it.  So the caller runs no call
+and no reference counting across it (what numba-IR inlining, ``inline="always"``, would
+also give), while numba's Python passes see each helper once instead of once per call
+site and nesting level.  Against numba-IR inlining, the first compile of every kernel
+takes about a third less (BENCHMARKS.md, "Start-up"), with bit-identical results
+(bench/same_results.py) and the same speed (bench/vs_mujoco.py).
+LLVM still optimises a copy at every site, so a helper's size times its sites stays the
+measure of what it costs the first compile.  No kernel has numba's C-callable wrapper
+(``no_cfunc_wrapper``: it is for ``cfunc`` and first-class function use, which the
+project has none of), one more copy of each kernel's code less to compile.
 
 Cache location: numba's own cache notices when a kernel's file changes but not when a
 kernel it calls, in another file, changes — a stale cache would then run old code.  So
@@ -35,26 +47,14 @@ which is safe because the folder's hash covers the sources and
 numba's own per-file stamp is a hash of the file's content.  Setting
 ``NUMBA_CACHE_DIR`` overrides all of this (numba's own layout, per path).
 
-First compile: numba's inliner copies a callee's IR at every call site of an
-``njit_inline`` function (and again for each level of nesting).  These measures keep that
-cheap, each active only while numba compiles and none changing what is computed:
-- Python's cyclic collector: the copies are millions of short-lived objects, and its
-  young-generation passes run every 700 allocations.  A listener on numba's
+First compile: two measures keep numba's own passes cheap, each active only while numba
+compiles and neither changing what is computed:
+- Python's cyclic collector: a compile makes millions of short-lived objects, and the
+  collector's young-generation passes run every 700 allocations.  A listener on numba's
   ``numba:compile`` event (numba's documented event API) raises the thresholds to
   COMPILE_GC_THRESHOLDS from the start of the outermost compile to its end.
-- One copy of a callee's scope per call site (``_one_memo_inliner``): numba's
-  ``InlineWorker.inline_ir`` deep-copies the callee's blocks one by one, each with a
-  memo of its own, and every block refers to the function's scope, which holds every
-  variable of the function; so the whole scope would be copied once per block (blocks
-  times variables).  During ``inline_ir`` the module's ``copy`` is replaced by one whose
-  ``deepcopy`` shares a single memo, so the blocks of one copy share one scope copy, as
-  the original blocks share one scope.  The LLVM IR numba emits is the same text
-  (``tests/test_jit.py`` compares it with and without), and ``mpr_ws`` alone compiles
-  in about two thirds of the time.  It is applied to numba 0.68.1 only, the pinned version
-  whose inliner it was checked against; ``MKCOLLISION_PLAIN_INLINER=1`` turns it off.
-- Three more of the same kind, in ``numba_speedups.py`` (imported here): SSA over the
-  blocks that name a variable, flag comparisons without properties, and one untyped IR
-  for every site that inlines a function.
+- Two of the same kind, in ``numba_speedups.py`` (imported here): SSA over the blocks
+  that name a variable, and flag comparisons without properties.
 
 Separate kernels (``njit_separate``): numba links a copy of every called kernel's code
 into its caller's module, then optimises and generates machine code for the whole
@@ -76,16 +76,16 @@ mapping would feel (their callers keep linked copies).  Applied to numba 0.68.1 
 whose code libraries it was written against; ``MKCOLLISION_LINK_ALL=1`` links every
 kernel as numba does.
 
-"Literal": an integer or boolean constant passed to a compiled (not inlined) kernel is
-typed ``Literal[int](c)`` or ``Literal[bool](c)``, and so is a loop variable before
-numba's type propagation has seen its later values (``k = 0`` ahead of ``k = axis`` in a
-loop).  numba then compiles the callee once per literal value (and once more for the
-plain type where a variable is passed), identical code, one more compile each.  Such a constant or first value is written
-``np.int64(c)`` or ``np.bool_(c)``, typed int64 or bool at once
-(``tests/test_jit.py`` finds constant arguments at the call sites).  ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
+"Literal": an integer or boolean constant passed to a kernel (``njit_inline`` ones
+too) is typed ``Literal[int](c)`` or ``Literal[bool](c)``, and so is a loop variable
+before numba's type propagation has seen its later values (``k = 0`` ahead of ``k =
+axis`` in a loop).  numba then compiles the callee once per literal value (and once
+more for the plain type where a variable is passed), identical code, one more compile
+each.  Such a constant or first value is written ``np.int64(c)`` or ``np.bool_(c)``,
+typed int64 or bool at once (``tests/test_jit.py`` finds constant arguments at the call
+sites).  ``bench/compile_time.py`` counts each kernel's compiles (a test cannot see
 them: a cached kernel never compiles the kernels it calls).
 """
-import copy
 import gc
 import hashlib
 import importlib
@@ -184,54 +184,12 @@ if not numba.config.DISABLE_JIT:
     event.register("numba:compile", _FewerGcPassesWhileCompiling())
 
 
-def _one_memo_inliner():
-    """Install the one-memo copy in numba's inliner (module docstring); returns
-    whether it is installed."""
-    try:
-        from numba.core import inline_closurecall as icc
-        worker = icc.InlineWorker
-        plain = worker.inline_ir
-    except (ImportError, AttributeError):
-        return False
-    if (numba.__version__ != "0.68.1" or getattr(plain, "_one_memo", False)
-            or getattr(icc, "copy", None) is not copy):
-        return getattr(plain, "_one_memo", False)
-
-    class _OneMemoCopy:
-        """The copy module, with one memo for every deepcopy made through it."""
-
-        def __init__(self):
-            self._memo = {}
-
-        def deepcopy(self, x, memo=None):
-            return copy.deepcopy(x, self._memo if memo is None else memo)
-
-        def __getattr__(self, name):
-            return getattr(copy, name)
-
-    def inline_ir(self, *args, **kwargs):
-        saved = icc.copy
-        icc.copy = _OneMemoCopy()
-        try:
-            return plain(self, *args, **kwargs)
-        finally:
-            icc.copy = saved
-
-    inline_ir._one_memo = True
-    inline_ir.__doc__ = plain.__doc__
-    worker.inline_ir = inline_ir
-    return True
-
-
-ONE_MEMO_INLINER = (not numba.config.DISABLE_JIT
-                    and os.environ.get("MKCOLLISION_PLAIN_INLINER", "") in ("", "0")
-                    and _one_memo_inliner())
-
-njit_kernel = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")
+njit_kernel = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy",
+                         no_cfunc_wrapper=True)
 njit_parallel = numba.njit(cache=True, fastmath=False, nogil=True, parallel=True,
-                           error_model="numpy")
+                           error_model="numpy", no_cfunc_wrapper=True)
 njit_inline = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy",
-                         inline="always")
+                         forceinline=True, no_cfunc_wrapper=True)
 prange = numba.prange
 
 # The library attribute that marks a compiled njit_separate kernel (its dependency

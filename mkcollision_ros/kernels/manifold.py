@@ -316,7 +316,8 @@ def _pair_manifold(codes, params, vrange, verts, ia, ib, pos_w, quat_w, row, kee
         rp = ra if ref_is_a else rb
         n_ref = _mv(rp, params[ip, :3])
         d = params[ip, 3] + params[ip, P_MARGIN] + _dot(n_ref, pos_w[ip])
-        ref_pts[0] = d * n_ref
+        for i in range(3):
+            ref_pts[0, i] = d * n_ref[i]
         nr = -1  # unbounded: no side planes
         if ref_is_a:
             ni = nb

@@ -126,14 +126,14 @@ def _write_support_plane(w, wa, out, iters):
     """The ray from v0 meets the boundary at v1, whose support plane has normal -v0:
     write that contact (origin on the segment v0-v1, or a degenerate portal).  Returns
     the signed distance."""
-    return _write_plane(w, wa, 1, -w[0, 0], -w[0, 1], -w[0, 2], -np.inf, out, iters)
+    return _write_plane(w, wa, np.int64(1), -w[0, 0], -w[0, 1], -w[0, 2], -np.inf, out, iters)
 
 
 @njit_inline
 def _portal_normal(w):
     """Unit outward normal (away from the interior point v0) of the portal (rows 1-3)
     and True, or zeros and False for a degenerate portal."""
-    nx, ny, nz = _cross_rows(w, 1, 2, 3)
+    nx, ny, nz = _cross_rows(w, np.int64(1), np.int64(2), np.int64(3))
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     if not nn > 0.0:
         return 0.0, 0.0, 0.0, False
@@ -224,7 +224,7 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
     out, buf = borrow(out), borrow(buf)
     trace_on = buf.shape[0] >= MPR_WS_ROWS + TR_HEADER_ROWS
     if trace_on:
-        trace_reset(buf, MPR_WS_ROWS)
+        trace_reset(buf, np.int64(MPR_WS_ROWS))
     if sa[0] == PLANE or sb[0] == PLANE:
         return ST_NOT_RUN
     scale = shape_scale(sa, sb)
@@ -249,8 +249,8 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         w[0, 2] = 0.0
 
     # v1 along -v0, then (phase 2, portal discovery) v2 along v1 x v0, from one support
-    # site: numba copies an inlined function's IR at every call site (jit.py, "First
-    # compile"), and the support is the largest part of mpr_ws
+    # site: an inlined function is a copy of its code at every call site (jit.py,
+    # "Inlining"), and the support is the largest part of mpr_ws
     dx, dy, dz = -w[0, 0], -w[0, 1], -w[0, 2]
     for k in range(1, 3):
         if k == 2:
@@ -265,14 +265,14 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
                 return _status(_write_support_plane(w, wa, out, 1.0), scale)
         h = _support(sa, sb, verts, r_ab, t_ab, dx, dy, dz, w, wa, wb, k)
         if trace_on:
-            trace_rows(buf, MPR_WS_ROWS, TR_MPR_DISCOVERY, w, k + 1)
+            trace_rows(buf, np.int64(MPR_WS_ROWS), np.int64(TR_MPR_DISCOVERY), w, k + 1)
         if h <= 0.0:
             return _write_separated(w, wa, k, dx, dy, dz, out, float(k))
-    nx, ny, nz = _cross_rows(w, 0, 1, 2)
+    nx, ny, nz = _cross_rows(w, np.int64(0), np.int64(1), np.int64(2))
     if nx * w[0, 0] + ny * w[0, 1] + nz * w[0, 2] > 0.0:
-        _copy_row(w, wa, wb, 1, 4)
-        _copy_row(w, wa, wb, 2, 1)
-        _copy_row(w, wa, wb, 4, 2)
+        _copy_row(w, wa, wb, np.int64(1), np.int64(4))
+        _copy_row(w, wa, wb, np.int64(2), np.int64(1))
+        _copy_row(w, wa, wb, np.int64(4), np.int64(2))
         nx, ny, nz = -nx, -ny, -nz
     iters = 2
     found = False
@@ -280,22 +280,22 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         iters += 1
         if not math.sqrt(nx * nx + ny * ny + nz * nz) > 0.0:
             break
-        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 3)
+        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, np.int64(3))
         if trace_on:
-            trace_rows(buf, MPR_WS_ROWS, TR_MPR_DISCOVERY, w, 4)
+            trace_rows(buf, np.int64(MPR_WS_ROWS), np.int64(TR_MPR_DISCOVERY), w, np.int64(4))
         if h <= 0.0:
-            return _write_separated(w, wa, 3, nx, ny, nz, out, float(iters))
+            return _write_separated(w, wa, np.int64(3), nx, ny, nz, out, float(iters))
         # (v1 x v3) . v0 < 0: origin outside (v0, v1, v3), replace v2
         if _bary(w[1, 0], w[1, 1], w[1, 2], w[3, 0], w[3, 1], w[3, 2],
                  w[0, 0], w[0, 1], w[0, 2]) < 0.0:
-            _copy_row(w, wa, wb, 3, 2)
-            nx, ny, nz = _cross_rows(w, 0, 1, 3)
+            _copy_row(w, wa, wb, np.int64(3), np.int64(2))
+            nx, ny, nz = _cross_rows(w, np.int64(0), np.int64(1), np.int64(3))
             continue
         # (v3 x v2) . v0 < 0: origin outside (v0, v3, v2), replace v1
         if _bary(w[3, 0], w[3, 1], w[3, 2], w[2, 0], w[2, 1], w[2, 2],
                  w[0, 0], w[0, 1], w[0, 2]) < 0.0:
-            _copy_row(w, wa, wb, 3, 1)
-            nx, ny, nz = _cross_rows(w, 0, 3, 2)
+            _copy_row(w, wa, wb, np.int64(3), np.int64(1))
+            nx, ny, nz = _cross_rows(w, np.int64(0), np.int64(3), np.int64(2))
             continue
         found = True
         break
@@ -314,7 +314,7 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
     # ---- phase 3: portal refinement ----------------------------------------------------
     while True:
         if trace_on:
-            trace_rows(buf, MPR_WS_ROWS, TR_MPR_REFINEMENT, w, 4)
+            trace_rows(buf, np.int64(MPR_WS_ROWS), np.int64(TR_MPR_REFINEMENT), w, np.int64(4))
         nx, ny, nz, ok = _portal_normal(w)
         if not ok:
             break                              # degenerate portal: report as is
@@ -324,9 +324,9 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
                 out[OUT_DIST] = 0.0
             return ST_FAILED
         iters += 1
-        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, 4)
+        h = _support(sa, sb, verts, r_ab, t_ab, nx, ny, nz, w, wa, wb, np.int64(4))
         if h < 0.0:
-            return _write_separated(w, wa, 4, nx, ny, nz, out, float(iters))
+            return _write_separated(w, wa, np.int64(4), nx, ny, nz, out, float(iters))
         if h - (w[1, 0] * nx + w[1, 1] * ny + w[1, 2] * nz) <= tol:
             break                              # portal within tolerance of the boundary
         # keep the ray from v0 through the origin inside the new portal's cone:
@@ -336,14 +336,14 @@ def mpr_ws(sa, sb, verts, r_ab, t_ab, out, buf):
         xz = w[4, 0] * w[0, 1] - w[4, 1] * w[0, 0]
         if w[1, 0] * xx + w[1, 1] * xy + w[1, 2] * xz > 0.0:
             if w[2, 0] * xx + w[2, 1] * xy + w[2, 2] * xz > 0.0:
-                _copy_row(w, wa, wb, 4, 1)
+                _copy_row(w, wa, wb, np.int64(4), np.int64(1))
             else:
-                _copy_row(w, wa, wb, 4, 3)
+                _copy_row(w, wa, wb, np.int64(4), np.int64(3))
         else:
             if w[3, 0] * xx + w[3, 1] * xy + w[3, 2] * xz > 0.0:
-                _copy_row(w, wa, wb, 4, 2)
+                _copy_row(w, wa, wb, np.int64(4), np.int64(2))
             else:
-                _copy_row(w, wa, wb, 4, 1)
+                _copy_row(w, wa, wb, np.int64(4), np.int64(1))
 
     dist = _write_portal(w, wa, wb, out, float(iters), scale)
     if dist != dist:

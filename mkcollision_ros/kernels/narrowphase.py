@@ -346,7 +346,7 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
     column), so those two skip the way into the body frame and back.  Writes ``out``
     (world; normal from A to B: -n when the shape is A, n when it is B; the point on
     the plane is p - dist n) and returns the signed distance (m)."""
-    nx, ny, nz = quat_rotate_xyz(quat_p, prm_p[0], prm_p[1], prm_p[2], False)
+    nx, ny, nz = quat_rotate_xyz(quat_p, prm_p[0], prm_p[1], prm_p[2], np.bool_(False))
     if code_s == SPHERE:
         # no rotation: the support point is the centre less the radius along n
         rad = prm_s[0] + prm_s[P_MARGIN]
@@ -359,9 +359,9 @@ def _half_space_world(code_s, prm_s, vr_s, verts, pos_s, quat_s, prm_p, pos_p, q
         h = prm_s[1] if nx * r02 + ny * r12 + nz * r22 <= 0.0 else -prm_s[1]
         sx, sy, sz = h * r02 - rad * nx, h * r12 - rad * ny, h * r22 - rad * nz
     else:
-        ux, uy, uz = quat_rotate_xyz(quat_s, -nx, -ny, -nz, True)
+        ux, uy, uz = quat_rotate_xyz(quat_s, -nx, -ny, -nz, np.bool_(True))
         sx, sy, sz = support_full_xyz(code_s, prm_s, verts, vr_s[0], vr_s[1], ux, uy, uz)
-        sx, sy, sz = quat_rotate_xyz(quat_s, sx, sy, sz, False)
+        sx, sy, sz = quat_rotate_xyz(quat_s, sx, sy, sz, np.bool_(False))
     # from the plane body's origin, not the world's (bodies far from the origin)
     ex = sx + (pos_s[0] - pos_p[0])
     ey = sy + (pos_s[1] - pos_p[1])

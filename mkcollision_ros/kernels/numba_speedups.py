@@ -1,16 +1,16 @@
-"""Faster first compiles: three measures in numba's compiler that change how it works,
-not what the kernels compute.  Each is installed on numba 0.68.1 only, the pinned version
+"""Faster first compiles: two measures in numba's compiler that change how it works, not
+what the kernels compute.  Each is installed on numba 0.68.1 only, the pinned version
 whose code it was checked against.  ``MKCOLLISION_PLAIN_NUMBA=1`` leaves numba as it is,
-and a comma list of ``ssa``, ``flags``, ``inliner`` leaves out those measures (for
-comparisons; ``tests/test_jit.py`` compiles with and without).  Measured with
-cProfile over the whole one-process compile (``compile_progress.warm_up_all(jobs=1)``),
-where numba's Python passes take about four fifths of the time and LLVM the rest.
+and a comma list of ``ssa``, ``flags`` leaves out those measures (for comparisons;
+``tests/test_jit.py`` compiles with and without).  Found with cProfile over the whole
+one-process compile (``compile_progress.warm_up_all(jobs=1)``), where numba's Python
+passes take about half the time and LLVM the rest.
 
 - SSA over the blocks that name a variable (``_ssa_rewrite_where_named``).  numba's SSA
   reconstruction (numba.core.ssa) fixes one variable at a time, and for each it rebuilds
   every block of the function twice, calling a handler on every statement: a function
-  with thousands of blocks (the batch loop with its inlined callees) and thousands of
-  variables assigned twice costs millions of handler calls.  Both rewrites change only
+  with thousands of blocks and thousands of variables assigned twice costs millions of
+  handler calls.  Both rewrites change only
   the statements that name the variable (a definition renamed, a use pointed at its
   reaching definition); every other block comes out as a copy of itself.  So the blocks
   where each variable is named are listed once, before the first variable is fixed, and
@@ -29,16 +29,6 @@ where numba's Python passes take about four fifths of the time and LLVM the rest
   values are read from the instance's dict with the defaults taken once a class; and an
   object equals itself without reading them.  Same results, about 25 times fewer
   Python calls.
-- One untyped IR a function for every site that inlines it
-  (``_untyped_ir_once``).  To inline an ``inline="always"`` kernel numba runs the
-  untyped half of its pipeline on the callee's bytecode at every call site (and that
-  run inlines the callee's own inlined callees, so nested helpers are processed again at
-  every level): numba's InlineWorker copies the IR it gets before changing it, so one
-  run a function (for the same typing and target contexts, flags and locals) serves
-  every site.  The callee's names are then made unique by the caller's scope
-  (``name.1`` where a fresh run would give the callee a new unique id), and its block
-  labels are the first run's: names and label numbers in the IR change, the
-  operations do not.
 """
 import os
 import threading
@@ -156,51 +146,6 @@ def _quick_flag_comparisons():
     return True
 
 
-def _untyped_ir_once():
-    """Install the inliner measure (module docstring); returns whether it is
-    installed."""
-    try:
-        from numba.core import inline_closurecall as icc
-        worker = icc.InlineWorker
-        plain = worker.inline_function
-    except (ImportError, AttributeError):
-        return False
-    if getattr(plain, "_once", False):
-        return True
-    untyped = {}
-
-    def key_of(self, function):
-        if self.flags is None:
-            return None
-        try:
-            local_types = tuple(sorted(self.locals.items())) if self.locals else ()
-            hash(local_types)
-        except TypeError:
-            return None
-        # run_untyped_passes sets enable_ssa itself, so it is no part of the key
-        flags = tuple((k, repr(v)) for k, v in self.flags.values().items()
-                      if k != "enable_ssa")
-        return (function, id(self.typingctx), id(self.targetctx), flags, local_types)
-
-    def inline_function(self, caller_ir, block, i, function, arg_typs=None):
-        key = key_of(self, function)
-        if key is None:
-            return plain(self, caller_ir, block, i, function, arg_typs=arg_typs)
-        callee_ir = untyped.get(key)
-        if callee_ir is None:
-            callee_ir = untyped[key] = self.run_untyped_passes(function)
-        else:
-            self.flags.enable_ssa = False      # as run_untyped_passes leaves it
-        return self.inline_ir(caller_ir, block, i, callee_ir,
-                              function.__code__.co_freevars, arg_typs=arg_typs)
-
-    inline_function._once = True
-    inline_function.__doc__ = plain.__doc__
-    worker.inline_function = inline_function
-    return True
-
-
 _ACTIVE = not numba.config.DISABLE_JIT and numba.__version__ == "0.68.1"
 SSA_WHERE_NAMED = _ACTIVE and _wanted("ssa") and _ssa_rewrite_where_named()
 QUICK_FLAG_COMPARISONS = _ACTIVE and _wanted("flags") and _quick_flag_comparisons()
-UNTYPED_IR_ONCE = _ACTIVE and _wanted("inliner") and _untyped_ir_once()

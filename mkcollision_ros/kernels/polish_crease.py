@@ -102,7 +102,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, ux, uy, uz, lim):
     direction u, for a pair of cylinders: the two cap normals of each and the two
     directions where their creases cross.  Returns (found, supports evaluated)."""
     cmin = math.cos(EPA_POLISH_CAP)
-    ox, oy, oz = _axis_of(1, 2, r_ab)
+    ox, oy, oz = _axis_of(np.int64(1), np.int64(2), r_ab)
     cx, cy, cz = -oy, ox, 0.0           # z x o (A's axis is z)
     cn = math.sqrt(cx * cx + cy * cy)
     nev = 0
@@ -112,7 +112,7 @@ def _kink_points(sa, sb, verts, r_ab, t_ab, ux, uy, uz, lim):
                 continue
             px, py, pz = cx / cn, cy / cn, cz / cn
         elif m < 4:
-            px, py, pz = _axis_of(0, 2, r_ab)
+            px, py, pz = _axis_of(np.int64(0), np.int64(2), r_ab)
         else:
             px, py, pz = ox, oy, oz
         if m % 2 == 1:
@@ -211,7 +211,7 @@ def _kink_polish(sa, sb, verts, r_ab, t_ab, scale, ws, side, axis):
                        paz, pbx, pby, pbz)
             return nev
     both = sa[0] == CYLINDER and sb[0] == CYLINDER
-    ox, oy, oz = _axis_of(1 - side, 2, r_ab)
+    ox, oy, oz = _axis_of(1 - side, np.int64(2), r_ab)
     # the other cylinder's crease is searched only where it passes within the basin cap
     # (EPA_POLISH_CAP) of the minimum found: farther, _polish_is_global's test covers it
     if both and not (r[0] and abs(r[4] * ox + r[5] * oy + r[6] * oz) > _SIN_CAP):

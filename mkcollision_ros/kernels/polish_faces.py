@@ -148,7 +148,7 @@ def _face_point(sa, sb, verts, r_ab, t_ab, side, nx, ny, nz):
     if side == 0:
         qx, qy, qz = pbx, pby, pbz
     else:
-        qx, qy, qz = _in_side_frame(1, r_ab, t_ab, pax, pay, paz)
+        qx, qy, qz = _in_side_frame(np.int64(1), r_ab, t_ab, pax, pay, paz)
     return h, qx, qy, qz, pax, pay, paz, pbx, pby, pbz
 
 
@@ -197,7 +197,7 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
     cs = 0 if sa[0] == CYLINDER else 1          # the cylinder's side (A's if both)
     os_ = 1 - cs
     ocode = sb[0] if cs == 0 else sa[0]
-    ax, ay, az = _axis_of(cs, 2, r_ab)
+    ax, ay, az = _axis_of(cs, np.int64(2), r_ab)
     if not abs(ax * dx + ay * dy + az * dz) < EPA_KINK_NEAR:
         return 0
     # the other segment: direction (bx, by, bz) and half-length lb, A's frame
@@ -206,7 +206,7 @@ def _crossing_test(sa, sb, verts, r_ab, t_ab, scale, ws, best, dx, dy, dz):
     P = ws[0][_VA:_VA + _NVMAX] if os_ == 0 else ws[0][_VB:_VB + _NVMAX]
     for e in range(ncand):
         if ocode == CYLINDER:
-            bx, by, bz = _axis_of(os_, 2, r_ab)
+            bx, by, bz = _axis_of(os_, np.int64(2), r_ab)
             lb = (sb[1] if os_ == 1 else sa[1])[1]
             px = py = pz = 0.0
         else:

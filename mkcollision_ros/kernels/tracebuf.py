@@ -26,6 +26,8 @@ Layout (the contract the Python reader, mkcollision_ros/trace.py, relies on):
 All points in A's frame (A's origin), metres.  A record that does not fit in the rows
 left is dropped whole and counted in the header; later, smaller records may still fit.
 """
+import numpy as np
+
 from .jit import njit_inline
 
 TR_MPR_DISCOVERY = 1
@@ -63,7 +65,7 @@ def trace_open(buf, base, kind, n1, n2):
 @njit_inline
 def trace_rows(buf, base, kind, src, n):
     """Record rows 0..n-1 of ``src`` (float64 (>= n, 3)) as a record of ``kind``."""
-    r = trace_open(buf, base, kind, n, 0)
+    r = trace_open(buf, base, kind, n, np.int64(0))
     if r >= 0:
         for i in range(n):
             buf[r + i, 0] = src[i, 0]

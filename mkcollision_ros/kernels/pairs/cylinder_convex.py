@@ -609,7 +609,7 @@ def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     tol = EPA_REL_TOL * scale
     # one pass: the lowest and highest vertices and the one nearest the axis
     zlo, zhi, rmin = math.inf, -math.inf, math.inf
-    ilo = ihi = inear = 0
+    ilo = ihi = inear = np.int64(0)
     for i in range(nv):
         x, y, z = _hull_point(pts, i, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx, ky, kz)
         if z < zlo:
@@ -632,7 +632,7 @@ def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
         tx, ty, tz = _hull_point(pts, ihi if s > 0.0 else ilo, cx, cy, cz, ux, uy, uz, vx,
                                  vy, vz, kx, ky, kz)
         h = big_h - s * pz
-        if _cover(False, s, px, py, pz, big_r, big_h, ax - px, ay - py, az - pz, tx - px,
+        if _cover(np.bool_(False), s, px, py, pz, big_r, big_h, ax - px, ay - py, az - pz, tx - px,
                   ty - py, tz - pz, 0.5 * (ax + tx) - px, 0.5 * (ay + ty) - py,
                   0.5 * (az + tz) - pz) >= h - tol:
             nx, ny, nz = _cap_normal(side, r_ab, s)
@@ -652,7 +652,7 @@ def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
         dy = qx * vx + qy * vy
         dz = qx * kx + qy * ky
         low = math.inf
-        j = 0
+        j = np.int64(0)
         for i in range(nv):
             val = pts[i, 0] * dx + pts[i, 1] * dy + pts[i, 2] * dz
             if val < low:
@@ -675,7 +675,7 @@ def _cylinder_convex_ball_bound(sa, sb, verts, r_ab, t_ab, scale, res):
                                          ky, kz)
                 tx, ty, tz = _hull_point(pts, ihi, cx, cy, cz, ux, uy, uz, vx, vy, vz, kx,
                                          ky, kz)
-                ball = _cover(True, 0.0, qx, qy, qz, big_r, big_h, lx - qx, ly - qy,
+                ball = _cover(np.bool_(True), 0.0, qx, qy, qz, big_r, big_h, lx - qx, ly - qy,
                               lz - qz, tx - qx, ty - qy, tz - qz, wx - qx, wy - qy, wz - qz)
             if not (ball > 0.0 and ball >= h - tol):
                 return 0.0

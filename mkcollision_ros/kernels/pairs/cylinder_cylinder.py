@@ -57,6 +57,8 @@ other cylinder's side or cap; pb - pa == -depth * n exactly after meet.
 """
 import math
 
+import numpy as np
+
 from ..constants import AXES_SIN_MIN, CC_CROSS_RINGS, CC_NEWTON_ITERS, CC_RIMS, EPA_REL_TOL
 from ..geometry import borrow_args, cylinder_inradius, minkowski_core_xyz
 from ..jit import borrow, njit_inline, njit_separate
@@ -203,9 +205,9 @@ def _crossing_depth(sa, sb, r_ab, t_ab, tol, res):
         # -h: their points at the foot (clamped to the segments), B's as _apart_out's p
         bx, by, bz = r_ab[0, 2], r_ab[1, 2], r_ab[2, 2]
         u = min(lb, max(-lb, u))
-        return _apart_out(res, -h, nx, ny, 0.0, 1, r_ab, t_ab, t_ab[0] - rb * nx + u * bx,
-                          t_ab[1] - rb * ny + u * by, t_ab[2] + u * bz, ra * nx, ra * ny,
-                          min(la, max(-la, s)))
+        return _apart_out(res, -h, nx, ny, 0.0, np.int64(1), r_ab, t_ab,
+                          t_ab[0] - rb * nx + u * bx, t_ab[1] - rb * ny + u * by,
+                          t_ab[2] + u * bz, ra * nx, ra * ny, min(la, max(-la, s)))
     ball = -math.inf
     if abs(s) <= la:
         ball = min(rb - abs(rb - h), lb - abs(u))
@@ -214,7 +216,8 @@ def _crossing_depth(sa, sb, r_ab, t_ab, tol, res):
     if not (ball >= h - tol
             or _crossing_global(ra, la, rb, lb, h, s, u, sn, r_ab[2, 2], tol)):
         return 0.0
-    _certified_out(res, h, nx, ny, 0.0, 1, r_ab, t_ab, ra * nx - h * nx, ra * ny - h * ny, s)
+    _certified_out(res, h, nx, ny, 0.0, np.int64(1), r_ab, t_ab, ra * nx - h * nx,
+                   ra * ny - h * ny, s)
     return h
 
 
@@ -279,7 +282,7 @@ def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
     res = borrow(res)
     tol = EPA_REL_TOL * scale
     best_h = math.inf
-    cap_side = -1
+    cap_side = np.int64(-1)
     cap_s = 0.0
     cpx = cpy = cpz = 0.0
     # the rims' upper bounds (index 2 side + (s + 1) / 2), -inf when out of reach
@@ -311,7 +314,7 @@ def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
                     # side line, cap diameter and diagonal
                     fx, fy, fz = -2.0 * zk * kx, -2.0 * zk * ky, -2.0 * zk * kz
                     gx, gy, gz = 2.0 * s * ex, 2.0 * s * ey, 2.0 * s * ez
-                    ball = _cover(False, s, px, py, pz, big_r, big_h, fx, fy, fz, gx, gy,
+                    ball = _cover(np.bool_(False), s, px, py, pz, big_r, big_h, fx, fy, fz, gx, gy,
                                   gz, fx + gx, fy + gy, fz + gz)
                 if ball >= h - tol:
                     best_h = h
@@ -340,7 +343,7 @@ def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
         return h        # the cores apart beyond a side's tangent plane
     # the rims, deepest bound first, while a bound exceeds the deepest ball found
     rim_d = 0.0
-    rim_side = -1
+    rim_side = np.int64(-1)
     rim_s = 0.0
     rpx = rpy = rpz = 0.0
     for _ in range(CC_RIMS):
@@ -391,7 +394,7 @@ def _cylinder_cylinder_bound(sa, sb, verts, r_ab, t_ab, scale, res):
         ex = 2.0 * (cx + rim_s * eta * kx - rpx)
         ey = 2.0 * (cy + rim_s * eta * ky - rpy)
         ez = 2.0 * (cz + rim_s * eta * kz - rpz)
-        if not _cover(True, 0.0, rpx, rpy, rpz, big_r, big_h, f * kx, f * ky, f * kz,
+        if not _cover(np.bool_(True), 0.0, rpx, rpy, rpz, big_r, big_h, f * kx, f * ky, f * kz,
                       ex, ey, ez, f * kx + ex, f * ky + ey, f * kz + ez) >= h - tol:
             return 0.0
     _certified_out(res, h, nx, ny, nz, rim_side, r_ab, t_ab, rpx, rpy, rpz)

@@ -19,6 +19,8 @@ from A to B is minus B's outward surface normal at x.
 """
 import math
 
+import numpy as np
+
 from ..constants import (BOX, CAPSULE, CONE, CYLINDER, ELLIPSOID, ELL_MAX_ITERS, P_MARGIN,
                          SE_HALVINGS, SE_ROOT_STOP, SPHERE)
 from ..geometry import inflation, quat_rotate_xyz
@@ -300,9 +302,9 @@ def sphere_world(prm_s, code_o, prm_o, pos_s, pos_o, quat_o, sphere_is_a, out):
         ro = prm_o[0] + prm_o[P_MARGIN]
     else:
         c0, c1, c2 = quat_rotate_xyz(quat_o, pos_s[0] - pos_o[0], pos_s[1] - pos_o[1],
-                                     pos_s[2] - pos_o[2], True)
+                                     pos_s[2] - pos_o[2], np.bool_(True))
         core, n0, n1, n2, ro = _point_to_shape(code_o, prm_o, c0, c1, c2)
-        nx, ny, nz = quat_rotate_xyz(quat_o, n0, n1, n2, False)
+        nx, ny, nz = quat_rotate_xyz(quat_o, n0, n1, n2, np.bool_(False))
     if sphere_is_a:
         return _finish_s(pos_s[0], pos_s[1], pos_s[2], core, nx, ny, nz, rs, ro, out)
     # the other shape is A: its core witness is the sphere's centre moved by the core

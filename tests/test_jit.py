@@ -154,7 +154,7 @@ def test_njit_inline_helpers_leave_no_call_and_no_copy_in_their_caller(tmp_path)
 
     script = tmp_path / "nested.py"
     script.write_text(_NESTED)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))   # the kernels' apart
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))  # not the kernels' cache
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                          env=env, check=True).stdout
     run = json.loads(out.strip().splitlines()[-1])
@@ -364,8 +364,9 @@ def _speedup_run(tmp_path, plain):
     import sys
     script = tmp_path / "speedups.py"
     script.write_text(_SPEEDUP_KERNEL)
+    # a cache of each run's own, apart from the kernels' cache
     env = dict(os.environ, MKCOLLISION_PLAIN_NUMBA=plain,
-               NUMBA_CACHE_DIR=str(tmp_path / "cache"))      # the kernels' cache apart
+               NUMBA_CACHE_DIR=str(tmp_path / f"cache-{plain}"))
     out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
                          text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])

@@ -25,9 +25,10 @@ like any kernel, and marked ``alwaysinline`` for LLVM (numba's ``forceinline``),
 inliner then puts its code into every caller that links it.  So the caller runs no call
 and no reference counting across it (what numba-IR inlining, ``inline="always"``, would
 also give), while numba's Python passes see each helper once instead of once per call
-site and nesting level.  Against numba-IR inlining, the first compile of every kernel
-takes about a third less (BENCHMARKS.md, "Start-up"), with bit-identical results
-(bench/same_results.py) and the same speed (bench/vs_mujoco.py).
+site and nesting level.  The first compile of every kernel takes about a third less
+than with numba-IR inlining (bench/startup.py, both on the project's 2-core machine),
+with bit-identical results (bench/same_results.py) and the same speed
+(bench/vs_mujoco.py).
 LLVM still optimises a copy at every site, so a helper's size times its sites stays the
 measure of what it costs the first compile.  No kernel has numba's C-callable wrapper
 (``no_cfunc_wrapper``: it is for ``cfunc`` and first-class function use, which the

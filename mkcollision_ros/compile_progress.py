@@ -23,18 +23,17 @@ kernel's cost puts the middle; this process then runs the warm-up, which loads t
 compiles the rest.  The list's end is GJK/EPA itself, about a third of all the work,
 which the helper compiles from the top down, and then the batch block above it (the
 narrow phase's top, which would otherwise be this process's last compile); its start
-holds the GJK loop and the two parts of
-GJK/EPA that compile reaches last (EPA, the GJK witness pass), done here before the
-helper gets to them, then the kernels apart from GJK/EPA's subtree, then GJK/EPA's other
-parts in the reverse of the order its compile reaches them.  Every compile of a shared
-kernel, in either process, first claims it (a file created with O_EXCL in DIR): the
-claimant compiles it and then marks it done; the other process, needing it, waits for
-the mark and loads it from the cache, or skips it (the lead and the helper's own loop).
-The call graph has no cycles, so two processes never wait for each other.  The helper
-compiles a kernel by its signature, written in kernels' terms in ``compile_plan.py``
-(``--write-plan`` rewrites it from the cache; ``tests/test_compile_progress.py`` checks
-it against the kernels' callers).  A signature asked for that the plan does not hold
-compiles here, unshared, and is reported.
+holds the GJK loop and the two parts of GJK/EPA that compile reaches last (EPA, the GJK
+witness pass), done here before the helper gets to them, then the kernels apart from
+GJK/EPA's subtree, then GJK/EPA's other parts in the reverse of the order its compile
+reaches them.  Every compile of a shared kernel, in either process, first claims it (a
+file created with O_EXCL in DIR): the claimant compiles it and then marks it done; the
+other process, needing it, waits for the mark and loads it from the cache, or skips it
+(the lead and the helper's own loop).  The call graph has no cycles, so two processes
+never wait for each other.  The helper compiles a kernel by its signature, written in
+kernels' terms in ``compile_plan.py`` (``--write-plan`` rewrites it from the cache;
+``tests/test_compile_progress.py`` checks it against the kernels' callers).  A signature
+asked for that the plan does not hold compiles here, unshared, and is reported.
 """
 import contextlib
 import importlib

@@ -10,9 +10,9 @@ passes take about half the time and LLVM the rest.
   reconstruction (numba.core.ssa) fixes one variable at a time, and for each it rebuilds
   every block of the function twice, calling a handler on every statement: a function
   with thousands of blocks and thousands of variables assigned twice costs millions of
-  handler calls.  Both rewrites change only
-  the statements that name the variable (a definition renamed, a use pointed at its
-  reaching definition); every other block comes out as a copy of itself.  So the blocks
+  handler calls.  Both rewrites change only the statements that name the variable (a
+  definition renamed, a use pointed at its reaching definition); every other block
+  comes out as a copy of itself.  So the blocks
   where each variable is named are listed once, before the first variable is fixed, and
   the two rewrites visit those blocks and copy the others' statement lists.  Fixing one
   variable never changes where another is named (its new names are fresh, the copies of
